@@ -1,1 +1,66 @@
-//! placeholder
+//! Kalman filter core of fathom: a fixed-size linear/extended Kalman filter with
+//! Joseph-form updates, innovation gating, sequential scalar and stacked (faer)
+//! updates, track-to-track fusion (paper A eq. (10)) and constant-velocity models.
+//!
+//! ```
+//! use fathom_core::Gaussian;
+//! use fathom_estimators::{GateThreshold, KalmanFilter, models};
+//! use nalgebra::{Matrix1, Matrix2, RowVector2, SMatrix, Vector1, Vector2};
+//!
+//! // 1-axis constant velocity [p, v], starting at t = 0.
+//! let prior = Gaussian::new(Vector2::new(0.0, 1.0), Matrix2::identity()).unwrap();
+//! let mut kf = KalmanFilter::new(prior, 0.0).unwrap();
+//! let f = models::cv_transition_1d(1.0).unwrap();
+//! let q = models::cv_white_accel_q_1d(1.0, 0.01).unwrap();
+//! kf.predict(&f, &q, 1.0).unwrap();
+//!
+//! // Position measurement z = p + v, v ~ N(0, 0.5^2), gated at 2.5 sigma.
+//! let h = SMatrix::<f64, 1, 2>::new(1.0, 0.0);
+//! let r = Matrix1::new(0.25);
+//! let gate = GateThreshold::from_sigma_distance(2.5).unwrap();
+//! let outcome = kf.update_gated(&Vector1::new(1.2), &h, &r, gate).unwrap();
+//! assert!(outcome.is_accepted());
+//! assert!(kf.covariance()[(0, 0)] < 0.25);
+//! assert_eq!(kf.time(), 1.0);
+//!
+//! // Bad input is an error naming what failed, and the filter is left unchanged.
+//! let before = kf.clone();
+//! assert!(kf.update(&Vector1::new(f64::NAN), &h, &r).is_err());
+//! assert_eq!(kf, before);
+//!
+//! // Sequential scalar updates (diagonal R), e.g. two position fixes.
+//! let rep = kf
+//!     .update_sequential_scalar(&[1.1, 1.3], &[RowVector2::new(1.0, 0.0); 2], &[0.25, 0.25], None)
+//!     .unwrap();
+//! assert_eq!(rep.num_accepted(), 2);
+//!
+//! // Track-to-track fusion of two independent estimates (eq. (10)).
+//! let a = Gaussian::new(Vector1::new(1.0), Matrix1::new(1.0)).unwrap();
+//! let b = Gaussian::new(Vector1::new(3.0), Matrix1::new(3.0)).unwrap();
+//! let fused = fathom_estimators::fusion::fuse_information(&a, &b).unwrap();
+//! assert!((fused.mean()[0] - 1.5).abs() < 1e-12 && (fused.cov()[(0, 0)] - 0.75).abs() < 1e-12);
+//! ```
+//!
+//! Error convention: filter steps return [`EstimatorError`] variants carrying the
+//! filter time stamp; time-free helpers (fusion, [`gating::nis`], [`models`]) wrap a
+//! [`fathom_core::CoreError`]. Every failing step leaves the filter unchanged.
+//!
+//! Allocation: the fixed-size path (`predict*`, `update*` with `const M`) does not
+//! allocate except to build an error. The sequential update allocates its report; the
+//! stacked update allocates faer/nalgebra dynamic matrices.
+
+pub mod error;
+pub mod fusion;
+pub mod gating;
+pub mod kalman;
+pub mod models;
+pub mod stacked;
+
+#[cfg(test)]
+mod consistency_tests;
+
+pub use error::EstimatorError;
+pub use fusion::fuse_information;
+pub use gating::{Gate, GateThreshold};
+pub use kalman::{KalmanFilter, ScalarMeasurement, ScalarOutcome, SequentialReport, UpdateInfo};
+pub use stacked::{StackedGatedReport, StackedUpdateInfo};

@@ -1,0 +1,177 @@
+//! `EstimatorError`: what went wrong in a filter step, naming the quantity, the index
+//! and the filter time stamp.
+
+use fathom_core::{CoreError, Time};
+
+/// Errors of the estimators. Filter-step variants carry the filter time `time` (s)
+/// at which the step was attempted (for a prediction: the target time).
+///
+/// Stand-alone math helpers that have no notion of time (fusion, [`crate::gating::nis`],
+/// model builders) report [`EstimatorError::Core`].
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum EstimatorError {
+    /// A value that must be finite is NaN or infinite.
+    #[error("{what}: value at index {index} is not finite ({value}) at t = {time} s")]
+    NonFinite {
+        /// What was checked (e.g. "measurement z", "measurement matrix H").
+        what: String,
+        /// Index of the offending element (row-major for matrices).
+        index: usize,
+        /// The offending value.
+        value: f64,
+        /// Filter time stamp, s.
+        time: Time,
+    },
+    /// A matrix that must be symmetric is not (beyond a relative tolerance).
+    #[error(
+        "{what}: matrix is not symmetric (entry ({row}, {col}) differs from its transpose by {diff:e}) at t = {time} s"
+    )]
+    NotSymmetric {
+        /// What matrix was checked.
+        what: String,
+        /// Row of the worst entry.
+        row: usize,
+        /// Column of the worst entry.
+        col: usize,
+        /// Absolute difference to the transposed entry.
+        diff: f64,
+        /// Filter time stamp, s.
+        time: Time,
+    },
+    /// A matrix that must be positive definite is not (Cholesky failed), or a
+    /// variance that must be positive is not.
+    #[error("{what} is not positive definite at t = {time} s")]
+    NotPositiveDefinite {
+        /// What matrix was checked (e.g. "measurement noise R",
+        /// "innovation covariance S", "updated covariance P").
+        what: String,
+        /// Filter time stamp, s.
+        time: Time,
+    },
+    /// Inputs of inconsistent sizes.
+    #[error("{what}: expected dimension {expected}, got {got}")]
+    DimensionMismatch {
+        /// Which input has the wrong size.
+        what: String,
+        /// The expected size.
+        expected: usize,
+        /// The size given.
+        got: usize,
+    },
+    /// A prediction to a time before the filter's current time.
+    #[error("{what}: target time {next} s is before the filter time {prev} s")]
+    TimeBackwards {
+        /// What step was attempted.
+        what: String,
+        /// The filter's current time, s.
+        prev: Time,
+        /// The requested time, s.
+        next: Time,
+    },
+    /// A parameter is out of its valid range.
+    #[error("{what}: {value} is out of range ({expected})")]
+    OutOfRange {
+        /// The parameter's name.
+        what: String,
+        /// The offending value.
+        value: f64,
+        /// Human-readable valid range, e.g. "> 0".
+        expected: &'static str,
+    },
+    /// An error from the shared vocabulary (checks without a time stamp).
+    #[error(transparent)]
+    Core(#[from] CoreError),
+}
+
+impl EstimatorError {
+    /// Converts a [`CoreError`] from a check done inside a filter step into the
+    /// corresponding variant carrying the filter time `time`.
+    pub fn from_core_at(err: CoreError, time: Time) -> Self {
+        match err {
+            CoreError::NonFinite { what, index, value } => Self::NonFinite {
+                what,
+                index,
+                value,
+                time,
+            },
+            CoreError::NotSymmetric {
+                what,
+                row,
+                col,
+                diff,
+            } => Self::NotSymmetric {
+                what,
+                row,
+                col,
+                diff,
+                time,
+            },
+            CoreError::NotPositiveDefinite { what } => Self::NotPositiveDefinite { what, time },
+            CoreError::OutOfRange {
+                what,
+                value,
+                expected,
+            } => Self::OutOfRange {
+                what,
+                value,
+                expected,
+            },
+            other => Self::Core(other),
+        }
+    }
+}
+
+/// Checks every entry of a (row x col) matrix given by `get` is finite; reports the
+/// first offending entry with a row-major index.
+pub(crate) fn check_finite_entries(
+    what: &str,
+    rows: usize,
+    cols: usize,
+    get: impl Fn(usize, usize) -> f64,
+    time: Time,
+) -> Result<(), EstimatorError> {
+    for r in 0..rows {
+        for c in 0..cols {
+            let value = get(r, c);
+            if !value.is_finite() {
+                return Err(EstimatorError::NonFinite {
+                    what: what.to_owned(),
+                    index: r * cols + c,
+                    value,
+                    time,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn core_errors_gain_the_time_stamp() {
+        let e = EstimatorError::from_core_at(
+            CoreError::NotPositiveDefinite {
+                what: "measurement noise R".into(),
+            },
+            12.5,
+        );
+        assert_eq!(
+            e,
+            EstimatorError::NotPositiveDefinite {
+                what: "measurement noise R".into(),
+                time: 12.5
+            }
+        );
+        assert!(e.to_string().contains("t = 12.5 s"));
+    }
+
+    #[test]
+    fn finite_check_reports_row_major_index() {
+        let m = [[1.0, 2.0, 3.0], [4.0, f64::NAN, 6.0]];
+        let e = check_finite_entries("H", 2, 3, |r, c| m[r][c], 1.0).unwrap_err();
+        assert!(matches!(e, EstimatorError::NonFinite { index: 4, .. }));
+    }
+}

@@ -1,0 +1,1143 @@
+//! Linear / extended Kalman filter with a fixed-size state: prediction, Joseph-form
+//! update, gated update and sequential scalar updates. No heap allocation on the
+//! fixed-size path (errors aside).
+
+use crate::{
+    EstimatorError,
+    error::check_finite_entries,
+    gating::{Gate, GateThreshold},
+};
+use fathom_core::{
+    Gaussian, Time,
+    gaussian::{SYMMETRY_TOLERANCE, check_covariance, symmetrize},
+};
+use nalgebra::{Cholesky, Const, RowSVector, SMatrix, SVector};
+
+/// Diagnostics of an applied update: innovation `nu`, its covariance
+/// `S = H P H^T + R` and the NIS `nu^T S^-1 nu`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UpdateInfo<const M: usize> {
+    /// Innovation `nu = z - H x` (or the one given to the `*_with_innovation` updates).
+    pub innovation: SVector<f64, M>,
+    /// Innovation covariance `S = H P^- H^T + R` (symmetrized).
+    pub innovation_cov: SMatrix<f64, M, M>,
+    /// Normalized innovation squared `nu^T S^-1 nu` (chi-square with `M` dof when
+    /// the filter is consistent).
+    pub nis: f64,
+}
+
+/// One scalar measurement for [`KalmanFilter::update_sequential_scalar_with`]:
+/// innovation `nu = z - h(x)`, Jacobian row `h` and noise variance `r`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScalarMeasurement<const N: usize> {
+    /// Innovation `z - h(x)` at the current (partially updated) state.
+    pub innovation: f64,
+    /// Measurement row `H_i` (Jacobian of `h` for an EKF).
+    pub h_row: RowSVector<f64, N>,
+    /// Measurement noise variance `r_i > 0`.
+    pub variance: f64,
+}
+
+/// Outcome of one scalar step of a sequential update.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ScalarOutcome {
+    /// Innovation `nu_i`.
+    pub innovation: f64,
+    /// Innovation variance `S_i = H_i P H_i^T + r_i` (with `P` after the previous scalars).
+    pub innovation_var: f64,
+    /// `nu_i^2 / S_i`.
+    pub nis: f64,
+    /// Whether the scalar passed the gate and was applied.
+    pub accepted: bool,
+}
+
+/// Report of a sequential scalar update, one outcome per measurement in order.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SequentialReport {
+    /// Outcomes in the order the scalars were processed.
+    pub outcomes: Vec<ScalarOutcome>,
+}
+
+impl SequentialReport {
+    /// Indices of the rejected scalars.
+    pub fn rejected(&self) -> impl Iterator<Item = usize> + '_ {
+        self.outcomes
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| !o.accepted)
+            .map(|(i, _)| i)
+    }
+
+    /// Number of applied scalars.
+    pub fn num_accepted(&self) -> usize {
+        self.outcomes.iter().filter(|o| o.accepted).count()
+    }
+}
+
+/// A Kalman filter with an `N`-dimensional state `x`, covariance `P` and the time
+/// stamp `time` (s) the estimate refers to.
+///
+/// Invariants kept by every method: `x` finite, `P` finite, exactly symmetric and
+/// positive definite (Cholesky succeeds). A failing step returns an error and leaves
+/// `x`, `P` and `time` unchanged.
+///
+/// Equations (Bar-Shalom et al., Joseph form):
+/// - predict: `x = F x (+ B u)`, `P = F P F^T + Q`, symmetrized;
+/// - update: `S = H P H^T + R`, `K = P H^T S^-1` (Cholesky solve),
+///   `x = x + K nu`, `P = (I - K H) P (I - K H)^T + K R K^T`, symmetrized.
+#[derive(Debug, Clone, PartialEq)]
+pub struct KalmanFilter<const N: usize> {
+    x: SVector<f64, N>,
+    p: SMatrix<f64, N, N>,
+    time: Time,
+}
+
+/// Everything computed before the gate decision (shared by all update flavours).
+struct Prepared<const N: usize, const M: usize> {
+    pht: SMatrix<f64, N, M>,
+    s: SMatrix<f64, M, M>,
+    chol: Cholesky<f64, Const<M>>,
+    nis: f64,
+}
+
+impl<const N: usize> KalmanFilter<N> {
+    /// A filter starting from the prior `prior` at time `time`.
+    ///
+    /// # Errors
+    /// [`EstimatorError::NonFinite`] for a non-finite time or mean, or a covariance
+    /// error naming "initial covariance P0" (the Gaussian is re-checked, it may have
+    /// been built unchecked).
+    pub fn new(prior: Gaussian<N>, time: Time) -> Result<Self, EstimatorError> {
+        check_time("initial time", time, time)?;
+        let (x, p) = prior.into_parts();
+        check_finite_entries("initial state x0", N, 1, |r, _| x[r], time)?;
+        check_covariance("initial covariance P0", &p)
+            .map_err(|e| EstimatorError::from_core_at(e, time))?;
+        Ok(Self {
+            x,
+            p: symmetrize(&p),
+            time,
+        })
+    }
+
+    /// The state estimate `x`.
+    pub fn state(&self) -> &SVector<f64, N> {
+        &self.x
+    }
+
+    /// The covariance `P`.
+    pub fn covariance(&self) -> &SMatrix<f64, N, N> {
+        &self.p
+    }
+
+    /// The time stamp (s) of the estimate.
+    pub fn time(&self) -> Time {
+        self.time
+    }
+
+    /// The estimate as a Gaussian (the filter keeps the covariance invariants).
+    pub fn estimate(&self) -> Gaussian<N> {
+        Gaussian::new_unchecked(self.x, self.p)
+    }
+
+    /// Replaces the state `x`, keeping `P` and the time (e.g. the equalized state of
+    /// the EFF structure, paper A step 2, or an external reset).
+    ///
+    /// # Errors
+    /// [`EstimatorError::NonFinite`] naming "state x"; the filter is unchanged.
+    pub fn set_state(&mut self, x: SVector<f64, N>) -> Result<(), EstimatorError> {
+        check_finite_entries("state x", N, 1, |r, _| x[r], self.time)?;
+        self.x = x;
+        Ok(())
+    }
+
+    /// Replaces state and covariance, keeping the time.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::new`], naming "state x" / "covariance P"; the filter is unchanged.
+    pub fn set_estimate(&mut self, estimate: Gaussian<N>) -> Result<(), EstimatorError> {
+        let (x, p) = estimate.into_parts();
+        check_finite_entries("state x", N, 1, |r, _| x[r], self.time)?;
+        check_covariance("covariance P", &p)
+            .map_err(|e| EstimatorError::from_core_at(e, self.time))?;
+        self.x = x;
+        self.p = symmetrize(&p);
+        Ok(())
+    }
+
+    /// Predicts to `new_time`: `x = F x`, `P = F P F^T + Q` (symmetrized).
+    ///
+    /// `F` and `Q` are the discrete model for the step `new_time - time()` (see
+    /// [`crate::models`]); `Q` must be symmetric with a non-negative diagonal
+    /// (positive semi-definite is enough, the result must be positive definite).
+    ///
+    /// # Errors
+    /// [`EstimatorError::TimeBackwards`] if `new_time < time()`, non-finite or
+    /// non-symmetric inputs, or [`EstimatorError::NotPositiveDefinite`] for
+    /// "predicted covariance P"; errors carry `new_time` and leave the filter unchanged.
+    pub fn predict(
+        &mut self,
+        f: &SMatrix<f64, N, N>,
+        q: &SMatrix<f64, N, N>,
+        new_time: Time,
+    ) -> Result<(), EstimatorError> {
+        check_time("predict", new_time, self.time)?;
+        check_finite_entries("transition matrix F", N, N, |r, c| f[(r, c)], new_time)?;
+        let x_pred = f * self.x;
+        self.predict_core(x_pred, f, q, new_time)
+    }
+
+    /// Predicts with a control input: `x = F x + B u`, `P = F P F^T + Q`.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::predict`], plus non-finite `B` ("control matrix B") or
+    /// `u` ("control input u").
+    pub fn predict_with_control<const U: usize>(
+        &mut self,
+        f: &SMatrix<f64, N, N>,
+        b: &SMatrix<f64, N, U>,
+        u: &SVector<f64, U>,
+        q: &SMatrix<f64, N, N>,
+        new_time: Time,
+    ) -> Result<(), EstimatorError> {
+        check_time("predict", new_time, self.time)?;
+        check_finite_entries("transition matrix F", N, N, |r, c| f[(r, c)], new_time)?;
+        check_finite_entries("control matrix B", N, U, |r, c| b[(r, c)], new_time)?;
+        check_finite_entries("control input u", U, 1, |r, _| u[r], new_time)?;
+        let x_pred = f * self.x + b * u;
+        self.predict_core(x_pred, f, q, new_time)
+    }
+
+    /// EKF prediction: the caller propagates the state through its nonlinear model,
+    /// `x_pred = f(x, u)`, and gives the Jacobian `F = df/dx`; `P = F P F^T + Q`.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::predict`], plus non-finite "predicted state x".
+    pub fn predict_nonlinear(
+        &mut self,
+        x_pred: &SVector<f64, N>,
+        f_jacobian: &SMatrix<f64, N, N>,
+        q: &SMatrix<f64, N, N>,
+        new_time: Time,
+    ) -> Result<(), EstimatorError> {
+        check_time("predict", new_time, self.time)?;
+        check_finite_entries(
+            "transition Jacobian F",
+            N,
+            N,
+            |r, c| f_jacobian[(r, c)],
+            new_time,
+        )?;
+        self.predict_core(*x_pred, f_jacobian, q, new_time)
+    }
+
+    fn predict_core(
+        &mut self,
+        x_pred: SVector<f64, N>,
+        f: &SMatrix<f64, N, N>,
+        q: &SMatrix<f64, N, N>,
+        new_time: Time,
+    ) -> Result<(), EstimatorError> {
+        check_finite_entries("predicted state x", N, 1, |r, _| x_pred[r], new_time)?;
+        check_process_noise(q, new_time)?;
+        let p_pred = symmetrize(&(f * self.p * f.transpose() + q));
+        check_pd("predicted covariance P", &p_pred, new_time)?;
+        self.x = x_pred;
+        self.p = p_pred;
+        self.time = new_time;
+        Ok(())
+    }
+
+    /// Linear update with measurement `z = H x + v`, `v ~ N(0, R)`, at the filter time
+    /// (Joseph form, see the type docs).
+    ///
+    /// # Errors
+    /// Non-finite `z` ("measurement z"), `H` ("measurement matrix H") or `R`;
+    /// `R` not symmetric / not positive definite ("measurement noise R");
+    /// "innovation covariance S" or "updated covariance P" not positive definite.
+    /// Errors carry `time()` and leave the filter unchanged.
+    pub fn update<const M: usize>(
+        &mut self,
+        z: &SVector<f64, M>,
+        h: &SMatrix<f64, M, N>,
+        r: &SMatrix<f64, M, M>,
+    ) -> Result<UpdateInfo<M>, EstimatorError> {
+        check_finite_entries("measurement z", M, 1, |i, _| z[i], self.time)?;
+        check_finite_entries("measurement matrix H", M, N, |i, j| h[(i, j)], self.time)?;
+        let nu = z - h * self.x;
+        let prep = self.prepare(&nu, h, r)?;
+        self.apply(&nu, h, r, prep)
+    }
+
+    /// Update with a given innovation `nu` (EKF: `nu = z - h(x)`, `H = dh/dx` at `x`);
+    /// same code path as [`KalmanFilter::update`].
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::update`], naming "innovation nu" instead of "measurement z".
+    pub fn update_with_innovation<const M: usize>(
+        &mut self,
+        nu: &SVector<f64, M>,
+        h: &SMatrix<f64, M, N>,
+        r: &SMatrix<f64, M, M>,
+    ) -> Result<UpdateInfo<M>, EstimatorError> {
+        check_finite_entries("innovation nu", M, 1, |i, _| nu[i], self.time)?;
+        check_finite_entries("measurement matrix H", M, N, |i, j| h[(i, j)], self.time)?;
+        let prep = self.prepare(nu, h, r)?;
+        self.apply(nu, h, r, prep)
+    }
+
+    /// Gated linear update: computes the NIS first and applies the update only when
+    /// `gate.accepts(nis)`; otherwise returns [`Gate::Rejected`] and the filter is unchanged.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::update`].
+    pub fn update_gated<const M: usize>(
+        &mut self,
+        z: &SVector<f64, M>,
+        h: &SMatrix<f64, M, N>,
+        r: &SMatrix<f64, M, M>,
+        gate: GateThreshold,
+    ) -> Result<Gate<M>, EstimatorError> {
+        check_finite_entries("measurement z", M, 1, |i, _| z[i], self.time)?;
+        check_finite_entries("measurement matrix H", M, N, |i, j| h[(i, j)], self.time)?;
+        let nu = z - h * self.x;
+        self.gated_core(&nu, h, r, gate)
+    }
+
+    /// Gated update with a given innovation (EKF flavour of [`KalmanFilter::update_gated`]).
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::update_with_innovation`].
+    pub fn update_with_innovation_gated<const M: usize>(
+        &mut self,
+        nu: &SVector<f64, M>,
+        h: &SMatrix<f64, M, N>,
+        r: &SMatrix<f64, M, M>,
+        gate: GateThreshold,
+    ) -> Result<Gate<M>, EstimatorError> {
+        check_finite_entries("innovation nu", M, 1, |i, _| nu[i], self.time)?;
+        check_finite_entries("measurement matrix H", M, N, |i, j| h[(i, j)], self.time)?;
+        self.gated_core(nu, h, r, gate)
+    }
+
+    fn gated_core<const M: usize>(
+        &mut self,
+        nu: &SVector<f64, M>,
+        h: &SMatrix<f64, M, N>,
+        r: &SMatrix<f64, M, M>,
+        gate: GateThreshold,
+    ) -> Result<Gate<M>, EstimatorError> {
+        let prep = self.prepare(nu, h, r)?;
+        if !gate.accepts(prep.nis) {
+            return Ok(Gate::Rejected { nis: prep.nis });
+        }
+        self.apply(nu, h, r, prep).map(Gate::Accepted)
+    }
+
+    /// Checks `R`, forms `S = H P H^T + R`, factors it and computes the NIS.
+    /// `nu` and `H` are already checked finite.
+    fn prepare<const M: usize>(
+        &self,
+        nu: &SVector<f64, M>,
+        h: &SMatrix<f64, M, N>,
+        r: &SMatrix<f64, M, M>,
+    ) -> Result<Prepared<N, M>, EstimatorError> {
+        check_covariance("measurement noise R", r)
+            .map_err(|e| EstimatorError::from_core_at(e, self.time))?;
+        let pht = self.p * h.transpose();
+        let s = symmetrize(&(h * pht + r));
+        let chol = s
+            .cholesky()
+            .ok_or_else(|| EstimatorError::NotPositiveDefinite {
+                what: "innovation covariance S".into(),
+                time: self.time,
+            })?;
+        let nis = nu.dot(&chol.solve(nu));
+        Ok(Prepared { pht, s, chol, nis })
+    }
+
+    /// Gain, Joseph-form covariance, PD check, commit.
+    fn apply<const M: usize>(
+        &mut self,
+        nu: &SVector<f64, M>,
+        h: &SMatrix<f64, M, N>,
+        r: &SMatrix<f64, M, M>,
+        prep: Prepared<N, M>,
+    ) -> Result<UpdateInfo<M>, EstimatorError> {
+        // K^T = S^-1 (P H^T)^T, S symmetric.
+        let k: SMatrix<f64, N, M> = prep.chol.solve(&prep.pht.transpose()).transpose();
+        let x_new = self.x + k * nu;
+        let ikh = SMatrix::<f64, N, N>::identity() - k * h;
+        let p_new = symmetrize(&(ikh * self.p * ikh.transpose() + k * r * k.transpose()));
+        check_finite_entries("updated state x", N, 1, |i, _| x_new[i], self.time)?;
+        check_pd("updated covariance P", &p_new, self.time)?;
+        self.x = x_new;
+        self.p = p_new;
+        Ok(UpdateInfo {
+            innovation: *nu,
+            innovation_cov: prep.s,
+            nis: prep.nis,
+        })
+    }
+
+    /// Sequential scalar updates (valid when `R` is diagonal): for each `i` in order,
+    /// `nu_i = z_i - H_i x`, `S_i = H_i P H_i^T + r_i`, optional gate on `nu_i^2 / S_i`,
+    /// then a scalar Joseph update. Rejected scalars are skipped and reported.
+    ///
+    /// All-or-nothing: on error the filter is unchanged.
+    ///
+    /// # Errors
+    /// [`EstimatorError::DimensionMismatch`] if the slice lengths differ; non-finite
+    /// `"measurement z"` / `"measurement row H[i]"`; [`EstimatorError::NotPositiveDefinite`]
+    /// for `"measurement variance r_diag[i]"` `<= 0`, `"innovation variance S[i]"` or
+    /// "updated covariance P".
+    pub fn update_sequential_scalar(
+        &mut self,
+        z: &[f64],
+        h_rows: &[RowSVector<f64, N>],
+        r_diag: &[f64],
+        gate: Option<GateThreshold>,
+    ) -> Result<SequentialReport, EstimatorError> {
+        for (what, got) in [
+            ("measurement rows H", h_rows.len()),
+            ("r_diag", r_diag.len()),
+        ] {
+            if got != z.len() {
+                return Err(EstimatorError::DimensionMismatch {
+                    what: what.into(),
+                    expected: z.len(),
+                    got,
+                });
+            }
+        }
+        check_finite_entries("measurement z", z.len(), 1, |i, _| z[i], self.time)?;
+        self.update_sequential_scalar_with(z.len(), gate, |i, x| ScalarMeasurement {
+            innovation: z[i] - (h_rows[i] * x)[0],
+            h_row: h_rows[i],
+            variance: r_diag[i],
+        })
+    }
+
+    /// Sequential scalar updates where `measurement(i, x)` gives the `i`-th scalar
+    /// (innovation, Jacobian row, variance) at the current, already partially updated
+    /// state `x` (an EKF relinearizes there; paper B's SI scheme). `count` scalars are
+    /// processed in order; gating and errors as in
+    /// [`KalmanFilter::update_sequential_scalar`].
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::update_sequential_scalar`]; the filter is unchanged on error.
+    pub fn update_sequential_scalar_with<F>(
+        &mut self,
+        count: usize,
+        gate: Option<GateThreshold>,
+        mut measurement: F,
+    ) -> Result<SequentialReport, EstimatorError>
+    where
+        F: FnMut(usize, &SVector<f64, N>) -> ScalarMeasurement<N>,
+    {
+        let t = self.time;
+        let mut x = self.x;
+        let mut p = self.p;
+        let mut outcomes = Vec::with_capacity(count);
+        for i in 0..count {
+            let m = measurement(i, &x);
+            if !m.innovation.is_finite() {
+                return Err(EstimatorError::NonFinite {
+                    what: "innovation nu".into(),
+                    index: i,
+                    value: m.innovation,
+                    time: t,
+                });
+            }
+            if let Some(c) = (0..N).find(|&c| !m.h_row[c].is_finite()) {
+                return Err(EstimatorError::NonFinite {
+                    what: format!("measurement row H[{i}]"),
+                    index: c,
+                    value: m.h_row[c],
+                    time: t,
+                });
+            }
+            if !(m.variance.is_finite() && m.variance > 0.0) {
+                return Err(EstimatorError::NotPositiveDefinite {
+                    what: format!("measurement variance r_diag[{i}] = {}", m.variance),
+                    time: t,
+                });
+            }
+            let pht: SVector<f64, N> = p * m.h_row.transpose();
+            let s = (m.h_row * pht)[0] + m.variance;
+            if !(s.is_finite() && s > 0.0) {
+                return Err(EstimatorError::NotPositiveDefinite {
+                    what: format!("innovation variance S[{i}]"),
+                    time: t,
+                });
+            }
+            let nis = m.innovation * m.innovation / s;
+            let accepted = gate.is_none_or(|g| g.accepts(nis));
+            outcomes.push(ScalarOutcome {
+                innovation: m.innovation,
+                innovation_var: s,
+                nis,
+                accepted,
+            });
+            if !accepted {
+                continue;
+            }
+            let k = pht / s;
+            x += k * m.innovation;
+            let ikh = SMatrix::<f64, N, N>::identity() - k * m.h_row;
+            p = symmetrize(&(ikh * p * ikh.transpose() + k * k.transpose() * m.variance));
+        }
+        check_finite_entries("updated state x", N, 1, |i, _| x[i], t)?;
+        check_pd("updated covariance P", &p, t)?;
+        self.x = x;
+        self.p = p;
+        Ok(SequentialReport { outcomes })
+    }
+
+    /// Commits an externally computed `(x, P)` after checking it (used by the
+    /// dynamic-size stacked update).
+    pub(crate) fn commit_checked(
+        &mut self,
+        x: SVector<f64, N>,
+        p: SMatrix<f64, N, N>,
+    ) -> Result<(), EstimatorError> {
+        let p = symmetrize(&p);
+        check_finite_entries("updated state x", N, 1, |i, _| x[i], self.time)?;
+        check_pd("updated covariance P", &p, self.time)?;
+        self.x = x;
+        self.p = p;
+        Ok(())
+    }
+}
+
+fn check_time(what: &str, new_time: Time, current: Time) -> Result<(), EstimatorError> {
+    if !new_time.is_finite() {
+        return Err(EstimatorError::NonFinite {
+            what: format!("{what}: time"),
+            index: 0,
+            value: new_time,
+            time: current,
+        });
+    }
+    if new_time < current {
+        return Err(EstimatorError::TimeBackwards {
+            what: what.to_owned(),
+            prev: current,
+            next: new_time,
+        });
+    }
+    Ok(())
+}
+
+/// `Q`: finite, symmetric (relative tolerance as `fathom_core`), non-negative diagonal.
+fn check_process_noise<const N: usize>(
+    q: &SMatrix<f64, N, N>,
+    time: Time,
+) -> Result<(), EstimatorError> {
+    const WHAT: &str = "process noise Q";
+    check_finite_entries(WHAT, N, N, |r, c| q[(r, c)], time)?;
+    let mut scale = f64::MIN_POSITIVE;
+    for i in 0..N {
+        let d = q[(i, i)];
+        if d < 0.0 {
+            return Err(EstimatorError::NotPositiveDefinite {
+                what: format!("{WHAT} (diagonal entry {i} = {d})"),
+                time,
+            });
+        }
+        scale = scale.max(d);
+    }
+    for r in 0..N {
+        for c in (r + 1)..N {
+            let diff = (q[(r, c)] - q[(c, r)]).abs();
+            if diff > SYMMETRY_TOLERANCE * scale {
+                return Err(EstimatorError::NotSymmetric {
+                    what: WHAT.into(),
+                    row: r,
+                    col: c,
+                    diff,
+                    time,
+                });
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Finite and positive definite (Cholesky succeeds).
+fn check_pd<const N: usize>(
+    what: &str,
+    p: &SMatrix<f64, N, N>,
+    time: Time,
+) -> Result<(), EstimatorError> {
+    check_finite_entries(what, N, N, |r, c| p[(r, c)], time)?;
+    if p.cholesky().is_none() {
+        return Err(EstimatorError::NotPositiveDefinite {
+            what: what.to_owned(),
+            time,
+        });
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_relative_eq;
+    use nalgebra::{
+        DMatrix, DVector, Matrix1, Matrix2, Matrix3, RowVector2, SMatrix, Vector1, Vector2, Vector3,
+    };
+    use proptest::prelude::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    fn filter2(x: Vector2<f64>, p: Matrix2<f64>) -> KalmanFilter<2> {
+        KalmanFilter::new(Gaussian::new(x, p).unwrap(), 0.0).unwrap()
+    }
+
+    #[test]
+    fn textbook_constant_position() {
+        // x0 = 0, P0 = 1, R = 1, z = 1 -> K = 1/2, x = 0.5, P = 0.5, S = 2, NIS = 1/2.
+        let mut kf = KalmanFilter::new(
+            Gaussian::new(Vector1::new(0.0), Matrix1::new(1.0)).unwrap(),
+            0.0,
+        )
+        .unwrap();
+        let info = kf
+            .update(&Vector1::new(1.0), &Matrix1::new(1.0), &Matrix1::new(1.0))
+            .unwrap();
+        assert_relative_eq!(kf.state()[0], 0.5, epsilon = 1e-15);
+        assert_relative_eq!(kf.covariance()[(0, 0)], 0.5, epsilon = 1e-15);
+        assert_relative_eq!(info.innovation_cov[(0, 0)], 2.0);
+        assert_relative_eq!(info.nis, 0.5);
+    }
+
+    #[test]
+    fn textbook_two_state_by_hand() {
+        // x0 = [0, 1], P0 = I, F = [1 1; 0 1], Q = 0:
+        //   predicted x = [1, 1], P = [2 1; 1 1].
+        // H = [1 0], R = 1, z = 3: nu = 2, S = 3, K = [2/3, 1/3],
+        //   x = [7/3, 5/3], P = P - K S K^T = [2/3 1/3; 1/3 2/3], NIS = 4/3.
+        let mut kf = filter2(Vector2::new(0.0, 1.0), Matrix2::identity());
+        kf.predict(&Matrix2::new(1.0, 1.0, 0.0, 1.0), &Matrix2::zeros(), 1.0)
+            .unwrap();
+        assert_relative_eq!(*kf.state(), Vector2::new(1.0, 1.0));
+        assert_relative_eq!(*kf.covariance(), Matrix2::new(2.0, 1.0, 1.0, 1.0));
+        assert_eq!(kf.time(), 1.0);
+        let info = kf
+            .update(
+                &Vector1::new(3.0),
+                &SMatrix::<f64, 1, 2>::new(1.0, 0.0),
+                &Matrix1::new(1.0),
+            )
+            .unwrap();
+        assert_relative_eq!(
+            *kf.state(),
+            Vector2::new(7.0 / 3.0, 5.0 / 3.0),
+            epsilon = 1e-14
+        );
+        assert_relative_eq!(
+            *kf.covariance(),
+            Matrix2::new(2.0, 1.0, 1.0, 2.0) / 3.0,
+            epsilon = 1e-14
+        );
+        assert_relative_eq!(info.nis, 4.0 / 3.0, epsilon = 1e-14);
+        assert_relative_eq!(info.innovation[0], 2.0);
+    }
+
+    #[test]
+    fn control_and_nonlinear_predictions_share_the_covariance_path() {
+        let f = Matrix2::new(1.0, 0.5, 0.0, 1.0);
+        let q = Matrix2::new(0.1, 0.02, 0.02, 0.2);
+        let b = Vector2::new(0.125, 0.5); // acceleration input, dt = 0.5
+        let u = Vector1::new(2.0);
+        let mut a = filter2(Vector2::new(1.0, -1.0), Matrix2::new(1.0, 0.2, 0.2, 0.5));
+        let mut c = a.clone();
+        a.predict_with_control(&f, &b, &u, &q, 0.5).unwrap();
+        let x_pred = f * c.state() + b * 2.0;
+        c.predict_nonlinear(&x_pred, &f, &q, 0.5).unwrap();
+        assert_eq!(a, c);
+        assert_relative_eq!(*a.state(), Vector2::new(0.75, 0.0), epsilon = 1e-15);
+    }
+
+    #[test]
+    fn update_with_innovation_matches_update() {
+        let mut a = filter2(Vector2::new(1.0, 2.0), Matrix2::new(2.0, 0.3, 0.3, 1.0));
+        let mut b = a.clone();
+        let h = Matrix2::new(1.0, 0.0, 0.5, 1.0);
+        let r = Matrix2::new(0.5, 0.1, 0.1, 0.4);
+        let z = Vector2::new(1.3, 3.1);
+        let ia = a.update(&z, &h, &r).unwrap();
+        let ib = b
+            .update_with_innovation(&(z - h * Vector2::new(1.0, 2.0)), &h, &r)
+            .unwrap();
+        assert_eq!(a, b);
+        assert_eq!(ia, ib);
+    }
+
+    #[test]
+    fn errors_name_what_and_leave_state_unchanged() {
+        let mut kf = filter2(Vector2::new(1.0, 2.0), Matrix2::identity());
+        kf.predict(&Matrix2::identity(), &Matrix2::identity(), 3.0)
+            .unwrap();
+        let before = kf.clone();
+        let h = SMatrix::<f64, 1, 2>::new(1.0, 0.0);
+
+        let e = kf
+            .update(&Vector1::new(f64::NAN), &h, &Matrix1::new(1.0))
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { what, index: 0, time, .. }
+                if what == "measurement z" && *time == 3.0),
+            "{e}"
+        );
+        assert!(e.to_string().contains("measurement z"));
+        assert_eq!(kf, before);
+
+        let e = kf
+            .update(&Vector1::new(1.0), &h, &Matrix1::new(-1.0))
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { what, time }
+                if what == "measurement noise R" && *time == 3.0),
+            "{e}"
+        );
+        assert_eq!(kf, before);
+
+        let e = kf
+            .update(
+                &Vector2::new(1.0, 1.0),
+                &Matrix2::identity(),
+                &Matrix2::new(1.0, 2.0, 2.0, 1.0),
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { what, .. } if what == "measurement noise R")
+        );
+        let e = kf
+            .update(
+                &Vector2::new(1.0, 1.0),
+                &Matrix2::identity(),
+                &Matrix2::new(1.0, 0.5, 0.0, 1.0),
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotSymmetric { what, .. } if what == "measurement noise R")
+        );
+        let e = kf
+            .update(
+                &Vector1::new(1.0),
+                &SMatrix::<f64, 1, 2>::new(1.0, f64::INFINITY),
+                &Matrix1::new(1.0),
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { what, index: 1, .. } if what == "measurement matrix H")
+        );
+        let e = kf
+            .update_with_innovation(&Vector1::new(f64::NAN), &h, &Matrix1::new(1.0))
+            .unwrap_err();
+        assert!(matches!(&e, EstimatorError::NonFinite { what, .. } if what == "innovation nu"));
+        assert_eq!(kf, before);
+
+        // prediction errors
+        let e = kf
+            .predict(&Matrix2::identity(), &Matrix2::identity(), 2.0)
+            .unwrap_err();
+        assert!(matches!(
+            e,
+            EstimatorError::TimeBackwards {
+                prev: 3.0,
+                next: 2.0,
+                ..
+            }
+        ));
+        let e = kf
+            .predict(
+                &Matrix2::identity(),
+                &Matrix2::new(1.0, 0.0, 0.0, -1.0),
+                4.0,
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { what, time } if what.starts_with("process noise Q") && *time == 4.0)
+        );
+        let e = kf
+            .predict(
+                &Matrix2::new(1.0, f64::NAN, 0.0, 1.0),
+                &Matrix2::identity(),
+                4.0,
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { what, index: 1, .. } if what == "transition matrix F")
+        );
+        // a singular F with Q = 0 makes the predicted P singular
+        let e = kf
+            .predict(&Matrix2::new(1.0, 1.0, 1.0, 1.0), &Matrix2::zeros(), 4.0)
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { what, .. } if what == "predicted covariance P")
+        );
+        assert!(
+            kf.predict(&Matrix2::identity(), &Matrix2::zeros(), f64::NAN)
+                .is_err()
+        );
+        assert_eq!(kf, before);
+
+        // sequential: the bad scalar is the second one, the first must not be committed
+        let e = kf
+            .update_sequential_scalar(
+                &[1.0, 2.0],
+                &[RowVector2::new(1.0, 0.0), RowVector2::new(0.0, 1.0)],
+                &[1.0, 0.0],
+                None,
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { what, .. } if what.contains("r_diag[1]"))
+        );
+        let e = kf
+            .update_sequential_scalar(&[1.0], &[], &[1.0], None)
+            .unwrap_err();
+        assert!(matches!(
+            e,
+            EstimatorError::DimensionMismatch {
+                expected: 1,
+                got: 0,
+                ..
+            }
+        ));
+        assert_eq!(kf, before);
+
+        // construction
+        let bad = Gaussian::new_unchecked(Vector2::zeros(), Matrix2::new(1.0, 0.0, 0.0, -1.0));
+        assert!(matches!(
+            KalmanFilter::new(bad, 0.0),
+            Err(EstimatorError::NotPositiveDefinite { .. })
+        ));
+        let good = Gaussian::new(Vector2::zeros(), Matrix2::identity()).unwrap();
+        assert!(KalmanFilter::new(good.clone(), f64::NAN).is_err());
+        assert!(kf.set_state(Vector2::new(0.0, f64::NAN)).is_err());
+        assert_eq!(kf, before);
+        kf.set_state(Vector2::new(5.0, 6.0)).unwrap();
+        assert_eq!(kf.covariance(), before.covariance());
+        kf.set_estimate(good).unwrap();
+        assert_eq!(*kf.covariance(), Matrix2::identity());
+    }
+
+    #[test]
+    fn gated_update_rejects_outliers_without_touching_the_state() {
+        let mut kf = filter2(Vector2::new(0.0, 0.0), Matrix2::identity());
+        let before = kf.clone();
+        let h = SMatrix::<f64, 1, 2>::new(1.0, 0.0);
+        let r = Matrix1::new(1.0);
+        let gate = GateThreshold::from_sigma_distance(2.5).unwrap();
+        // S = 2; nu = 4 -> NIS = 8 > 6.25
+        let g = kf.update_gated(&Vector1::new(4.0), &h, &r, gate).unwrap();
+        assert!(matches!(g, Gate::Rejected { nis } if (nis - 8.0).abs() < 1e-12));
+        assert!(!g.is_accepted());
+        assert_eq!(kf, before);
+        // nu = 3 -> NIS = 4.5, accepted and identical to an ungated update
+        let g = kf.update_gated(&Vector1::new(3.0), &h, &r, gate).unwrap();
+        assert!(g.is_accepted());
+        assert_relative_eq!(g.nis(), 4.5);
+        let mut plain = before.clone();
+        plain.update(&Vector1::new(3.0), &h, &r).unwrap();
+        assert_eq!(kf, plain);
+        let g = kf
+            .update_with_innovation_gated(&Vector1::new(100.0), &h, &r, gate)
+            .unwrap();
+        assert!(!g.is_accepted());
+        assert_eq!(kf, plain);
+    }
+
+    fn random_spd<const K: usize>(rng: &mut ChaCha8Rng, eps: f64) -> SMatrix<f64, K, K> {
+        let a = SMatrix::<f64, K, K>::from_fn(|_, _| rng.random_range(-1.0..1.0));
+        a * a.transpose() + SMatrix::<f64, K, K>::identity() * eps
+    }
+
+    #[test]
+    fn sequential_equals_stacked_for_diagonal_r() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..20 {
+            let p = random_spd::<4>(&mut rng, 0.1);
+            let x = SMatrix::<f64, 4, 1>::from_fn(|_, _| rng.random_range(-5.0..5.0));
+            let h = SMatrix::<f64, 3, 4>::from_fn(|_, _| rng.random_range(-2.0..2.0));
+            let r_diag = [0.3, 1.2, 0.05];
+            let z = Vector3::from_fn(|_, _| rng.random_range(-5.0..5.0));
+            let kf = KalmanFilter::new(Gaussian::new(x, p).unwrap(), 1.0).unwrap();
+
+            let mut seq = kf.clone();
+            let rows: Vec<_> = (0..3).map(|i| h.row(i).into_owned()).collect();
+            let rep = seq
+                .update_sequential_scalar(z.as_slice(), &rows, &r_diag, None)
+                .unwrap();
+            assert_eq!(rep.num_accepted(), 3);
+
+            let mut stk = kf.clone();
+            let hd = DMatrix::from_fn(3, 4, |i, j| h[(i, j)]);
+            let rd = DMatrix::from_diagonal(&DVector::from_row_slice(&r_diag));
+            stk.update_stacked(&DVector::from_row_slice(z.as_slice()), &hd, &rd)
+                .unwrap();
+
+            assert_relative_eq!(
+                *seq.state(),
+                *stk.state(),
+                epsilon = 1e-12,
+                max_relative = 1e-12
+            );
+            assert_relative_eq!(
+                *seq.covariance(),
+                *stk.covariance(),
+                epsilon = 1e-12,
+                max_relative = 1e-12
+            );
+        }
+    }
+
+    #[test]
+    fn stacked_correlated_r_by_hand() {
+        // N = 2, m = 2, x0 = 0, P = diag(1, 2), H = I, R = [1 0.5; 0.5 1], z = [1, 2].
+        // S = [2 0.5; 0.5 3], det S = 5.75, S^-1 = [3 -0.5; -0.5 2] / 5.75.
+        // K = P S^-1 = [3 -0.5; -1 4] / 5.75, x = K z = [2, 7] / 5.75,
+        // P+ = (I - K) P = [2.75 1; 1 3.5] / 5.75, NIS = z^T S^-1 z = 9 / 5.75.
+        let mut kf = filter2(Vector2::zeros(), Matrix2::new(1.0, 0.0, 0.0, 2.0));
+        let info = kf
+            .update_stacked(
+                &DVector::from_row_slice(&[1.0, 2.0]),
+                &DMatrix::identity(2, 2),
+                &DMatrix::from_row_slice(2, 2, &[1.0, 0.5, 0.5, 1.0]),
+            )
+            .unwrap();
+        assert_relative_eq!(*kf.state(), Vector2::new(2.0, 7.0) / 5.75, epsilon = 1e-14);
+        assert_relative_eq!(
+            *kf.covariance(),
+            Matrix2::new(2.75, 1.0, 1.0, 3.5) / 5.75,
+            epsilon = 1e-14
+        );
+        assert_relative_eq!(info.nis, 9.0 / 5.75, epsilon = 1e-14);
+        assert_relative_eq!(
+            info.innovation_cov,
+            DMatrix::from_row_slice(2, 2, &[2.0, 0.5, 0.5, 3.0]),
+            epsilon = 1e-15
+        );
+        // the fixed-size path gives the same numbers
+        let mut fixed = filter2(Vector2::zeros(), Matrix2::new(1.0, 0.0, 0.0, 2.0));
+        fixed
+            .update(
+                &Vector2::new(1.0, 2.0),
+                &Matrix2::identity(),
+                &Matrix2::new(1.0, 0.5, 0.5, 1.0),
+            )
+            .unwrap();
+        assert_relative_eq!(*fixed.state(), *kf.state(), epsilon = 1e-14);
+        assert_relative_eq!(*fixed.covariance(), *kf.covariance(), epsilon = 1e-14);
+    }
+
+    #[test]
+    fn fixed_size_and_faer_stacked_updates_agree() {
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..20 {
+            let p = random_spd::<6>(&mut rng, 0.05);
+            let x = SMatrix::<f64, 6, 1>::from_fn(|_, _| rng.random_range(-5.0..5.0));
+            let h = SMatrix::<f64, 3, 6>::from_fn(|_, _| rng.random_range(-2.0..2.0));
+            let r = random_spd::<3>(&mut rng, 0.1);
+            let z = Vector3::from_fn(|_, _| rng.random_range(-5.0..5.0));
+            let kf = KalmanFilter::new(Gaussian::new(x, p).unwrap(), 0.0).unwrap();
+            let mut a = kf.clone();
+            let ia = a.update(&z, &h, &r).unwrap();
+            let mut b = kf.clone();
+            let ib = b
+                .update_stacked(
+                    &DVector::from_fn(3, |i, _| z[i]),
+                    &DMatrix::from_fn(3, 6, |i, j| h[(i, j)]),
+                    &DMatrix::from_fn(3, 3, |i, j| r[(i, j)]),
+                )
+                .unwrap();
+            assert_relative_eq!(
+                *a.state(),
+                *b.state(),
+                epsilon = 1e-10,
+                max_relative = 1e-10
+            );
+            assert_relative_eq!(
+                *a.covariance(),
+                *b.covariance(),
+                epsilon = 1e-10,
+                max_relative = 1e-10
+            );
+            assert_relative_eq!(ia.nis, ib.nis, max_relative = 1e-10);
+            assert_relative_eq!(
+                ia.innovation_cov,
+                Matrix3::from_fn(|i, j| ib.innovation_cov[(i, j)]),
+                max_relative = 1e-12
+            );
+        }
+    }
+
+    #[test]
+    fn stacked_errors_and_dimension_checks() {
+        let mut kf = filter2(Vector2::zeros(), Matrix2::identity());
+        let before = kf.clone();
+        let z = DVector::from_row_slice(&[1.0, 2.0]);
+        let e = kf
+            .update_stacked(&z, &DMatrix::identity(2, 3), &DMatrix::identity(2, 2))
+            .unwrap_err();
+        assert!(matches!(
+            e,
+            EstimatorError::DimensionMismatch {
+                expected: 2,
+                got: 3,
+                ..
+            }
+        ));
+        let e = kf
+            .update_stacked(&z, &DMatrix::identity(2, 2), &DMatrix::identity(3, 3))
+            .unwrap_err();
+        assert!(matches!(e, EstimatorError::DimensionMismatch { .. }));
+        let e = kf
+            .update_stacked(
+                &DVector::from_row_slice(&[1.0, f64::NAN]),
+                &DMatrix::identity(2, 2),
+                &DMatrix::identity(2, 2),
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { what, index: 1, .. } if what == "measurement z")
+        );
+        let e = kf
+            .update_stacked(
+                &z,
+                &DMatrix::identity(2, 2),
+                &DMatrix::from_row_slice(2, 2, &[1.0, 2.0, 2.0, 1.0]),
+            )
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { what, .. } if what == "measurement noise R")
+        );
+        assert_eq!(kf, before);
+        // m = 0 is a no-op
+        let info = kf
+            .update_stacked(
+                &DVector::zeros(0),
+                &DMatrix::zeros(0, 2),
+                &DMatrix::zeros(0, 0),
+            )
+            .unwrap();
+        assert_eq!(info.nis, 0.0);
+        assert_eq!(kf, before);
+    }
+
+    #[test]
+    fn sequential_gating_reports_rejected_scalars() {
+        let mut kf = filter2(Vector2::zeros(), Matrix2::identity());
+        let gate = GateThreshold::from_sigma_distance(2.5).unwrap();
+        let rows = [
+            RowVector2::new(1.0, 0.0),
+            RowVector2::new(0.0, 1.0),
+            RowVector2::new(1.0, 1.0),
+        ];
+        // second scalar is an outlier (nu = 10, S = 2, NIS = 50)
+        let rep = kf
+            .update_sequential_scalar(&[0.5, 10.0, 0.4], &rows, &[1.0, 1.0, 1.0], Some(gate))
+            .unwrap();
+        assert_eq!(rep.rejected().collect::<Vec<_>>(), vec![1]);
+        assert_eq!(rep.num_accepted(), 2);
+        assert_relative_eq!(rep.outcomes[1].nis, 50.0);
+        // same as the sequential update of the two good scalars only
+        let mut other = filter2(Vector2::zeros(), Matrix2::identity());
+        other
+            .update_sequential_scalar(&[0.5, 0.4], &[rows[0], rows[2]], &[1.0, 1.0], None)
+            .unwrap();
+        assert_relative_eq!(*kf.state(), *other.state(), epsilon = 1e-15);
+        assert_relative_eq!(*kf.covariance(), *other.covariance(), epsilon = 1e-15);
+    }
+
+    #[test]
+    fn stacked_gating_removes_components_then_updates_the_rest() {
+        let mut kf = filter2(Vector2::zeros(), Matrix2::identity());
+        let gate = GateThreshold::from_sigma_distance(2.5).unwrap();
+        let h = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, 0.0, 1.0, 1.0, 1.0]);
+        let r = DMatrix::from_row_slice(3, 3, &[1.0, 0.2, 0.1, 0.2, 1.0, 0.3, 0.1, 0.3, 1.0]);
+        let nu = DVector::from_row_slice(&[0.5, 10.0, 0.4]);
+        let rep = kf.update_stacked_gated(&nu, &h, &r, gate).unwrap();
+        assert_eq!(rep.rejected().collect::<Vec<_>>(), vec![1]);
+        assert_relative_eq!(rep.component_nis[1], 50.0);
+        let mut other = filter2(Vector2::zeros(), Matrix2::identity());
+        other
+            .update_stacked_with_innovation(
+                &DVector::from_row_slice(&[0.5, 0.4]),
+                &DMatrix::from_row_slice(2, 2, &[1.0, 0.0, 1.0, 1.0]),
+                &DMatrix::from_row_slice(2, 2, &[1.0, 0.1, 0.1, 1.0]),
+            )
+            .unwrap();
+        assert_eq!(kf, other);
+        // all rejected: no update
+        let before = kf.clone();
+        let rep = kf
+            .update_stacked_gated(&(nu * 100.0), &h, &r, gate)
+            .unwrap();
+        assert!(rep.update.is_none());
+        assert_eq!(kf, before);
+    }
+
+    #[test]
+    fn sequential_with_closure_relinearizes_at_the_current_state() {
+        // range-like scalar h(x) = |x| measured twice: the second innovation must use
+        // the state after the first update.
+        let mut kf = filter2(Vector2::new(3.0, 4.0), Matrix2::identity());
+        let z = [5.5, 5.5];
+        let mut seen = Vec::new();
+        kf.update_sequential_scalar_with(2, None, |i, x| {
+            seen.push(*x);
+            let range = x.norm();
+            ScalarMeasurement {
+                innovation: z[i] - range,
+                h_row: (x / range).transpose(),
+                variance: 0.25,
+            }
+        })
+        .unwrap();
+        assert_eq!(seen[0], Vector2::new(3.0, 4.0));
+        assert!(seen[1].norm() > 5.0);
+        assert!(kf.state().norm() > seen[1].norm());
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig::with_cases(256))]
+        #[test]
+        fn covariance_stays_symmetric_positive_definite(
+            a in prop::array::uniform9(-1.0f64..1.0),
+            f in prop::array::uniform9(-2.0f64..2.0),
+            b in prop::array::uniform9(-1.0f64..1.0),
+            h in prop::array::uniform6(-2.0f64..2.0),
+            c in prop::array::uniform4(-1.0f64..1.0),
+            x in prop::array::uniform3(-10.0f64..10.0),
+            z in prop::array::uniform2(-10.0f64..10.0),
+            eps in 1e-3f64..1.0,
+        ) {
+            let a = Matrix3::from_row_slice(&a);
+            let p0 = a * a.transpose() + Matrix3::identity() * eps;
+            let f = Matrix3::from_row_slice(&f);
+            let b = Matrix3::from_row_slice(&b);
+            let q = b * b.transpose() + Matrix3::identity() * 1e-3;
+            let h = SMatrix::<f64, 2, 3>::from_row_slice(&h);
+            let c = Matrix2::from_row_slice(&c);
+            let r = c * c.transpose() + Matrix2::identity() * 1e-2;
+            let mut kf = KalmanFilter::new(
+                Gaussian::new(Vector3::from_row_slice(&x), p0).unwrap(), 0.0).unwrap();
+            for step in 1..=3 {
+                kf.predict(&f, &q, step as f64).unwrap();
+                let p = kf.covariance();
+                prop_assert_eq!(*p, p.transpose());
+                prop_assert!(p.cholesky().is_some());
+                kf.update(&Vector2::from_row_slice(&z), &h, &r).unwrap();
+                let p = kf.covariance();
+                prop_assert_eq!(*p, p.transpose());
+                prop_assert!(p.cholesky().is_some());
+                prop_assert!(fathom_core::gaussian::check_covariance("P", p).is_ok());
+            }
+        }
+    }
+}
