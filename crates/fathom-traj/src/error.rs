@@ -40,4 +40,38 @@ pub enum TrajError {
         /// Why it is invalid.
         reason: String,
     },
+    /// A generated mission leaves the allowed speed band during its search phase.
+    #[error("mission speed {speed} m/s at t = {t} s is outside [{min}, {max}] m/s")]
+    SpeedOutOfBounds {
+        /// Time of the violation, s.
+        t: f64,
+        /// Speed found, m/s.
+        speed: f64,
+        /// Lower bound, m/s.
+        min: f64,
+        /// Upper bound, m/s.
+        max: f64,
+    },
+    /// A generated mission leaves the allowed depth band during its search phase.
+    #[error(
+        "mission depth {depth} m at t = {t} s deviates from {nominal} m by more than {tolerance} m"
+    )]
+    DepthOutOfTolerance {
+        /// Time of the violation, s.
+        t: f64,
+        /// Depth found, m.
+        depth: f64,
+        /// Nominal search depth, m.
+        nominal: f64,
+        /// Allowed deviation, m.
+        tolerance: f64,
+    },
+    /// A generated mission does not show the required number of course changes.
+    #[error("mission has {detected} course changes during the search, expected {expected}")]
+    CourseChangeCount {
+        /// Required number.
+        expected: usize,
+        /// Number detected.
+        detected: usize,
+    },
 }
