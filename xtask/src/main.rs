@@ -1,1 +1,201 @@
-fn main() {}
+//! Project automation. `cargo xtask paper [--only NAME] [--runs N] [--threads T]`
+//! reproduces the papers' experiments into `target/paper/` (see
+//! `shared/spec/README.md`, "Output contract").
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result};
+use fathom_sim::{PaperOptions, run_paper};
+
+const USAGE: &str = "\
+usage: cargo xtask <command> [options]
+
+commands:
+  paper    run the paper experiments, write target/paper/<experiment>/ and
+           target/paper/REPORT.md, print paper-versus-reproduced tables
+  help     show this message
+
+options of `paper`:
+  --only NAME     run only experiment NAME
+  --runs N        override every experiment's Monte Carlo run count (N >= 1)
+  --threads T     worker threads (T >= 1; default: all cores)";
+
+/// A parsed command line.
+#[derive(Debug, PartialEq, Eq)]
+enum Command {
+    Help,
+    Paper {
+        only: Option<String>,
+        runs: Option<usize>,
+        threads: Option<usize>,
+    },
+}
+
+/// Parse the arguments after the program name; `Err` is a usage error message.
+fn parse_args(args: &[String]) -> Result<Command, String> {
+    let Some((cmd, rest)) = args.split_first() else {
+        return Err("missing command".into());
+    };
+    match cmd.as_str() {
+        "help" | "-h" | "--help" => return Ok(Command::Help),
+        "paper" => {}
+        other => return Err(format!("unknown command `{other}`")),
+    }
+    let (mut only, mut runs, mut threads) = (None, None, None);
+    let mut i = 0;
+    while i < rest.len() {
+        let arg = rest[i].as_str();
+        if arg == "-h" || arg == "--help" {
+            return Ok(Command::Help);
+        }
+        // Accept both `--flag value` and `--flag=value`.
+        let (flag, inline) = match arg.split_once('=') {
+            Some((f, v)) if f.starts_with("--") => (f, Some(v.to_string())),
+            _ => (arg, None),
+        };
+        if !matches!(flag, "--only" | "--runs" | "--threads") {
+            return Err(format!("unknown option `{arg}`"));
+        }
+        let value = match inline {
+            Some(v) => v,
+            None => {
+                i += 1;
+                rest.get(i)
+                    .cloned()
+                    .ok_or_else(|| format!("option `{flag}` needs a value"))?
+            }
+        };
+        let count = |v: &str| -> Result<usize, String> {
+            match v.parse::<usize>() {
+                Ok(n) if n >= 1 => Ok(n),
+                _ => Err(format!(
+                    "option `{flag}` needs a whole number >= 1, got `{v}`"
+                )),
+            }
+        };
+        match flag {
+            "--only" if value.is_empty() => return Err("option `--only` needs a name".into()),
+            "--only" => only = Some(value),
+            "--runs" => runs = Some(count(&value)?),
+            _ => threads = Some(count(&value)?),
+        }
+        i += 1;
+    }
+    Ok(Command::Paper {
+        only,
+        runs,
+        threads,
+    })
+}
+
+/// The workspace root: the parent of this crate's manifest directory.
+fn workspace_root() -> Result<PathBuf> {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
+    manifest
+        .parent()
+        .map(Path::to_path_buf)
+        .with_context(|| format!("xtask manifest dir `{}` has no parent", manifest.display()))
+}
+
+fn paper(only: Option<String>, runs: Option<usize>, threads: Option<usize>) -> Result<()> {
+    let root = workspace_root()?;
+    let options = PaperOptions {
+        only,
+        runs,
+        threads,
+        out_root: root.join("target").join("paper"),
+        workspace_root: root,
+    };
+    let result = run_paper(options, &fathom_sim::experiments::registry())
+        .context("cargo xtask paper failed")?;
+    println!(
+        "{} experiment(s) done; report: {}",
+        result.experiments.len(),
+        result.report_path.display()
+    );
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    match parse_args(&args) {
+        Err(msg) => {
+            eprintln!("error: {msg}\n\n{USAGE}");
+            ExitCode::from(2)
+        }
+        Ok(Command::Help) => {
+            println!("{USAGE}");
+            ExitCode::SUCCESS
+        }
+        Ok(Command::Paper {
+            only,
+            runs,
+            threads,
+        }) => match paper(only, runs, threads) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(s: &str) -> Result<Command, String> {
+        let v: Vec<String> = s.split_whitespace().map(String::from).collect();
+        parse_args(&v)
+    }
+
+    #[test]
+    fn parses_paper_flags() {
+        assert_eq!(
+            parse("paper --only noise --runs 5 --threads=2"),
+            Ok(Command::Paper {
+                only: Some("noise".into()),
+                runs: Some(5),
+                threads: Some(2)
+            })
+        );
+        assert_eq!(
+            parse("paper"),
+            Ok(Command::Paper {
+                only: None,
+                runs: None,
+                threads: None
+            })
+        );
+        assert_eq!(parse("help"), Ok(Command::Help));
+        assert_eq!(parse("paper --help"), Ok(Command::Help));
+    }
+
+    #[test]
+    fn rejects_bad_arguments() {
+        assert!(parse("").is_err());
+        assert!(
+            parse("build")
+                .unwrap_err()
+                .contains("unknown command `build`")
+        );
+        assert!(
+            parse("paper --fast")
+                .unwrap_err()
+                .contains("unknown option `--fast`")
+        );
+        assert!(parse("paper --runs").unwrap_err().contains("needs a value"));
+        assert!(parse("paper --runs 0").unwrap_err().contains(">= 1"));
+        assert!(parse("paper --threads x").unwrap_err().contains("`x`"));
+        assert!(parse("paper extra").is_err());
+    }
+
+    #[test]
+    fn workspace_root_holds_the_workspace_manifest() {
+        let root = workspace_root().unwrap();
+        assert!(root.join("Cargo.toml").is_file());
+        assert!(root.join("xtask").is_dir());
+    }
+}

@@ -1,0 +1,210 @@
+//! The error type of the experiment layer: file I/O, scenario parsing and validation,
+//! output writing, plotting and experiment selection.
+
+use std::path::PathBuf;
+
+use fathom_core::CoreError;
+
+/// Everything that can go wrong in `fathom-sim`.
+///
+/// Variants carry the file, key path, row or experiment concerned. Wrapped causes are
+/// exposed through [`std::error::Error::source`], so `anyhow`'s `{:#}` prints the full
+/// chain (e.g. `experiment `noise` failed: cannot read `scenarios/noise.toml`: No such
+/// file or directory`).
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    /// Reading or writing a file or directory failed.
+    #[error("cannot {action} `{}`", path.display())]
+    Io {
+        /// What was attempted ("read", "write", "create directory", ...).
+        action: &'static str,
+        /// The file or directory concerned.
+        path: PathBuf,
+        /// The underlying I/O error.
+        #[source]
+        source: std::io::Error,
+    },
+
+    /// A TOML file could not be parsed or does not match the scenario schema
+    /// (syntax error, unknown key, wrong type, missing field).
+    #[error("{}", toml_message(file, key_path.as_deref(), *line, *column, message))]
+    Toml {
+        /// The file (or label) the text came from.
+        file: String,
+        /// Dotted key path (e.g. `noise.range_sigma`) when it is known.
+        key_path: Option<String>,
+        /// 1-based line of the offending text, when known.
+        line: Option<usize>,
+        /// 1-based column (in characters) of the offending text, when known.
+        column: Option<usize>,
+        /// The parser's / deserializer's message (e.g. "unknown field `foo`, expected ...").
+        message: String,
+    },
+
+    /// A scenario value parsed fine but is not allowed
+    /// (e.g. `noise.toml: key `noise.range_sigma`: must be > 0, got -0.1`).
+    #[error("{file}: key `{key_path}`: {reason}")]
+    Invalid {
+        /// The file (or label) the value came from.
+        file: String,
+        /// Dotted key path of the value.
+        key_path: String,
+        /// Why it is rejected, including the offending value.
+        reason: String,
+    },
+
+    /// A bad argument to a function of this crate (not tied to a scenario file).
+    #[error("invalid {what}: {reason}")]
+    InvalidArgument {
+        /// Which argument or input.
+        what: String,
+        /// Why it is rejected.
+        reason: String,
+    },
+
+    /// `--only NAME` names no registered experiment.
+    #[error(
+        "unknown experiment `{name}`; known experiments: {}",
+        known_list(known)
+    )]
+    UnknownExperiment {
+        /// The requested name.
+        name: String,
+        /// The registered names, in registry order.
+        known: Vec<String>,
+    },
+
+    /// An output value that must be finite is NaN or infinite (JSON cannot hold it).
+    #[error("{what}: value is not finite ({value})")]
+    NonFinite {
+        /// Where the value sits (e.g. "summary row `MF` / `mean_3d`: value").
+        what: String,
+        /// The offending value.
+        value: f64,
+    },
+
+    /// A plot could not be drawn (bad input data or a drawing-backend failure).
+    #[error("plot `{}`: {reason}", path.display())]
+    Plot {
+        /// The SVG file that was to be written.
+        path: PathBuf,
+        /// What went wrong (e.g. "series `EFF` is empty", "series `MF` point 3 is NaN").
+        reason: String,
+    },
+
+    /// Writing a CSV / Markdown output was refused (ragged columns, bad header, ...).
+    #[error("output `{}`: {reason}", path.display())]
+    Output {
+        /// The file that was to be written.
+        path: PathBuf,
+        /// What went wrong.
+        reason: String,
+    },
+
+    /// JSON (de)serialization failed.
+    #[error("JSON `{}`", path.display())]
+    Json {
+        /// The JSON file concerned.
+        path: PathBuf,
+        /// The underlying serde_json error.
+        #[source]
+        source: serde_json::Error,
+    },
+
+    /// A `fathom-core` check failed inside an experiment.
+    #[error(transparent)]
+    Core(#[from] CoreError),
+
+    /// An error from a model crate (trajectory, sensors, estimators, stats), with context.
+    #[error("{context}")]
+    Model {
+        /// What the experiment was doing (e.g. "simulating DVL for run 17").
+        context: String,
+        /// The underlying error.
+        #[source]
+        source: Box<dyn std::error::Error + Send + Sync + 'static>,
+    },
+
+    /// An experiment's run function failed.
+    #[error("experiment `{name}` failed")]
+    Experiment {
+        /// The experiment name.
+        name: String,
+        /// The error it returned.
+        #[source]
+        source: Box<SimError>,
+    },
+}
+
+impl SimError {
+    /// Build an [`SimError::Invalid`] (validation failure of a scenario value).
+    pub fn invalid(
+        file: impl Into<String>,
+        key_path: impl Into<String>,
+        reason: impl Into<String>,
+    ) -> Self {
+        SimError::Invalid {
+            file: file.into(),
+            key_path: key_path.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Build an [`SimError::InvalidArgument`].
+    pub fn invalid_argument(what: impl Into<String>, reason: impl Into<String>) -> Self {
+        SimError::InvalidArgument {
+            what: what.into(),
+            reason: reason.into(),
+        }
+    }
+
+    /// Wrap an error from a model crate with context, for use in
+    /// `.map_err(|e| SimError::model("simulating DVL", e))`.
+    pub fn model(
+        context: impl Into<String>,
+        source: impl std::error::Error + Send + Sync + 'static,
+    ) -> Self {
+        SimError::Model {
+            context: context.into(),
+            source: Box::new(source),
+        }
+    }
+
+    /// Build an [`SimError::Io`].
+    pub fn io(action: &'static str, path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        SimError::Io {
+            action,
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+fn toml_message(
+    file: &str,
+    key_path: Option<&str>,
+    line: Option<usize>,
+    column: Option<usize>,
+    message: &str,
+) -> String {
+    let mut out = String::from(file);
+    if let Some(k) = key_path {
+        out.push_str(&format!(": key `{k}`"));
+    }
+    match (line, column) {
+        (Some(l), Some(c)) => out.push_str(&format!(": line {l}, column {c}")),
+        (Some(l), None) => out.push_str(&format!(": line {l}")),
+        _ => {}
+    }
+    out.push_str(": ");
+    out.push_str(message.trim_end());
+    out
+}
+
+fn known_list(known: &[String]) -> String {
+    if known.is_empty() {
+        "(none registered)".to_string()
+    } else {
+        known.join(", ")
+    }
+}

@@ -1,0 +1,320 @@
+//! Scenario files: TOML loading into `serde` structs with error messages that name the
+//! file, the key path and the line, plus small validation helpers for scenario values.
+//!
+//! Scenario structs are plain `serde` structs with `#[serde(deny_unknown_fields)]`; a
+//! typo, a wrong type or a missing field gives one [`SimError::Toml`] such as
+//!
+//! ```text
+//! noise.toml: key `noise.range_sigma`: line 3, column 15: invalid type: string "x", expected f64
+//! ```
+
+use std::path::Path;
+
+use serde::de::DeserializeOwned;
+
+use crate::error::SimError;
+
+/// Read a TOML file and deserialize it into `T`.
+///
+/// The file label used in error messages is the path as given.
+///
+/// # Errors
+/// [`SimError::Io`] if the file cannot be read, [`SimError::Toml`] if it does not parse
+/// or does not match `T`.
+pub fn load_toml<T: DeserializeOwned>(path: impl AsRef<Path>) -> Result<T, SimError> {
+    let path = path.as_ref();
+    let text = std::fs::read_to_string(path).map_err(|e| SimError::io("read", path, e))?;
+    parse_toml(&text, &path.display().to_string())
+}
+
+/// Deserialize TOML `text` into `T`; `file_label` names the source in error messages.
+///
+/// # Errors
+/// [`SimError::Toml`] with the key path (when it can be determined) and the 1-based
+/// line and column of the offending text.
+pub fn parse_toml<T: DeserializeOwned>(text: &str, file_label: &str) -> Result<T, SimError> {
+    toml::from_str::<T>(text).map_err(|e| toml_error(&e, text, file_label))
+}
+
+/// Convert a `toml` deserialization error into a [`SimError::Toml`].
+fn toml_error(err: &toml::de::Error, text: &str, file_label: &str) -> SimError {
+    let span = err.span();
+    let (line, column) = match &span {
+        Some(s) => {
+            let (l, c) = line_col(text, s.start);
+            (Some(l), Some(c))
+        }
+        None => (None, None),
+    };
+    let message = err.message().trim().to_string();
+    let key_path = match (keys_from_error(err), unknown_field_name(&message)) {
+        // The deserializer records the enclosing table for an unknown field; add the field.
+        (Some(table), Some(field)) if !table.ends_with(&field) => Some(format!("{table}.{field}")),
+        (Some(keys), _) => Some(keys),
+        (None, _) => span
+            .as_ref()
+            .and_then(|s| key_path_at(text, s.start, &message)),
+    };
+    SimError::Toml {
+        file: file_label.to_string(),
+        key_path,
+        line,
+        column,
+        message,
+    }
+}
+
+/// The dotted key path the `toml` crate recorded for the error.
+///
+/// `toml::de::Error` keeps the key path private; its `Display` prints it as a last line
+/// "in `a.b`" when the error carries no input text, so a copy without input is rendered
+/// and that line is read back.
+fn keys_from_error(err: &toml::de::Error) -> Option<String> {
+    let mut bare = err.clone();
+    bare.set_input(None);
+    let rendered = bare.to_string();
+    let last = rendered.trim_end().lines().last()?;
+    let inner = last.strip_prefix("in `")?.strip_suffix('`')?;
+    (!inner.is_empty()).then(|| inner.to_string())
+}
+
+/// 1-based (line, column in characters) of byte `offset` in `text`.
+pub fn line_col(text: &str, offset: usize) -> (usize, usize) {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let before = &text[..offset];
+    let line = before.matches('\n').count() + 1;
+    let line_start = before.rfind('\n').map_or(0, |i| i + 1);
+    let column = text[line_start..offset].chars().count() + 1;
+    (line, column)
+}
+
+/// Reconstruct the key path at byte `offset` from the text: the enclosing `[table]`
+/// header plus the key on that line (or the unknown field named in `message`).
+fn key_path_at(text: &str, offset: usize, message: &str) -> Option<String> {
+    let offset = offset.min(text.len());
+    let mut table = String::new();
+    let mut line_key = None;
+    let mut pos = 0usize;
+    for raw in text.split_inclusive('\n') {
+        let start = pos;
+        pos += raw.len();
+        let line = raw.trim();
+        if line.starts_with('[') {
+            let name = line.trim_start_matches('[');
+            if let Some(end) = name.find(']') {
+                table = clean_key(&name[..end]);
+            }
+            if start <= offset && offset < pos {
+                break;
+            }
+        } else if start <= offset && offset < pos {
+            if let Some(eq) = line.find('=') {
+                line_key = Some(clean_key(&line[..eq]));
+            }
+            break;
+        }
+        if pos > offset {
+            break;
+        }
+    }
+    // An unknown field is named in the message; prefer it.
+    let key = unknown_field_name(message).or(line_key);
+    match (table.is_empty(), key) {
+        (true, Some(k)) => Some(k),
+        (false, Some(k)) => Some(format!("{table}.{k}")),
+        (false, None) => Some(table),
+        (true, None) => None,
+    }
+}
+
+fn unknown_field_name(message: &str) -> Option<String> {
+    let rest = message.strip_prefix("unknown field `")?;
+    let end = rest.find('`')?;
+    Some(rest[..end].to_string())
+}
+
+fn clean_key(k: &str) -> String {
+    k.split('.')
+        .map(|p| p.trim().trim_matches('"').trim_matches('\''))
+        .collect::<Vec<_>>()
+        .join(".")
+}
+
+/// Check that a scenario value is finite and `> 0`.
+///
+/// # Errors
+/// [`SimError::Invalid`] such as `noise.toml: key `noise.range_sigma`: must be > 0, got -0.1`.
+pub fn require_positive(file: &str, key_path: &str, value: f64) -> Result<f64, SimError> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(SimError::invalid(
+            file,
+            key_path,
+            format!("must be > 0, got {value}"),
+        ))
+    }
+}
+
+/// Check that a scenario value is finite and `>= 0`.
+///
+/// # Errors
+/// [`SimError::Invalid`] naming the file, key and value.
+pub fn require_non_negative(file: &str, key_path: &str, value: f64) -> Result<f64, SimError> {
+    if value.is_finite() && value >= 0.0 {
+        Ok(value)
+    } else {
+        Err(SimError::invalid(
+            file,
+            key_path,
+            format!("must be >= 0, got {value}"),
+        ))
+    }
+}
+
+/// Check that a scenario value is finite and within `[lo, hi]`.
+///
+/// # Errors
+/// [`SimError::Invalid`] naming the file, key, range and value.
+pub fn require_in_range(
+    file: &str,
+    key_path: &str,
+    value: f64,
+    lo: f64,
+    hi: f64,
+) -> Result<f64, SimError> {
+    if value.is_finite() && value >= lo && value <= hi {
+        Ok(value)
+    } else {
+        Err(SimError::invalid(
+            file,
+            key_path,
+            format!("must be in [{lo}, {hi}], got {value}"),
+        ))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use serde::Deserialize;
+
+    #[derive(Debug, Deserialize, PartialEq)]
+    #[serde(deny_unknown_fields)]
+    struct Demo {
+        name: String,
+        noise: Noise,
+    }
+
+    #[derive(Debug, Deserialize, PartialEq)]
+    #[serde(deny_unknown_fields)]
+    struct Noise {
+        range_sigma: f64,
+        runs: usize,
+    }
+
+    fn err_text(text: &str) -> (SimError, String) {
+        let e = parse_toml::<Demo>(text, "demo.toml").unwrap_err();
+        let s = e.to_string();
+        (e, s)
+    }
+
+    #[test]
+    fn parses_valid_file() {
+        let d: Demo = parse_toml(
+            "name = \"a\"\n[noise]\nrange_sigma = 0.5\nruns = 3\n",
+            "demo.toml",
+        )
+        .unwrap();
+        assert_eq!(d.noise.runs, 3);
+        assert_eq!(d.noise.range_sigma, 0.5);
+    }
+
+    #[test]
+    fn unknown_key_names_file_key_and_line() {
+        let (e, s) = err_text("name = \"a\"\n[noise]\nrange_sigma = 0.5\nrunz = 3\n");
+        println!("{s}");
+        assert!(s.starts_with("demo.toml"), "{s}");
+        assert!(s.contains("`noise.runz`"), "{s}");
+        assert!(s.contains("line 4"), "{s}");
+        assert!(s.contains("unknown field `runz`"), "{s}");
+        assert!(matches!(e, SimError::Toml { line: Some(4), .. }));
+    }
+
+    #[test]
+    fn wrong_type_names_file_key_and_line() {
+        let (_, s) = err_text("name = \"a\"\n[noise]\nrange_sigma = \"x\"\nruns = 3\n");
+        println!("{s}");
+        assert!(s.starts_with("demo.toml"), "{s}");
+        assert!(s.contains("`noise.range_sigma`"), "{s}");
+        assert!(s.contains("line 3"), "{s}");
+        assert!(s.contains("invalid type"), "{s}");
+    }
+
+    #[test]
+    fn missing_field_names_file_and_field() {
+        let (_, s) = err_text("name = \"a\"\n[noise]\nrange_sigma = 0.5\n");
+        println!("{s}");
+        assert!(s.starts_with("demo.toml"), "{s}");
+        assert!(s.contains("missing field `runs`"), "{s}");
+        assert!(s.contains("`noise`"), "{s}");
+        assert!(s.contains("line 2"), "{s}");
+    }
+
+    #[test]
+    fn top_level_unknown_key_and_file_label() {
+        let (_, s) = err_text("nam = \"a\"\n[noise]\nrange_sigma = 0.5\nruns = 3\n");
+        assert!(s.starts_with("demo.toml: key `nam`: line 1"), "{s}");
+        let dir = std::env::temp_dir()
+            .join("fathom-sim-tests")
+            .join("scenario");
+        std::fs::create_dir_all(&dir).unwrap();
+        let p = dir.join("bad.toml");
+        std::fs::write(&p, "name = 3\n").unwrap();
+        let s = load_toml::<Demo>(&p).unwrap_err().to_string();
+        assert!(
+            s.starts_with(&format!("{}: key `name`: line 1", p.display())),
+            "{s}"
+        );
+    }
+
+    #[test]
+    fn syntax_error_gives_line() {
+        let (_, s) = err_text("name = \"a\"\n[noise]\nrange_sigma = = 0.5\nruns = 3\n");
+        println!("{s}");
+        assert!(s.starts_with("demo.toml"), "{s}");
+        assert!(s.contains("line 3"), "{s}");
+    }
+
+    #[test]
+    fn load_missing_file_is_io_error() {
+        let e = load_toml::<Demo>("/nonexistent/fathom/demo.toml").unwrap_err();
+        assert!(matches!(e, SimError::Io { .. }));
+        assert!(e.to_string().contains("/nonexistent/fathom/demo.toml"));
+    }
+
+    #[test]
+    fn line_col_counts_from_one() {
+        assert_eq!(line_col("ab\ncd", 0), (1, 1));
+        assert_eq!(line_col("ab\ncd", 4), (2, 2));
+        assert_eq!(line_col("ab\ncd", 99), (2, 3));
+    }
+
+    #[test]
+    fn validation_helpers() {
+        let e = require_positive("noise.toml", "noise.range_sigma", -0.1).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "noise.toml: key `noise.range_sigma`: must be > 0, got -0.1"
+        );
+        assert!(require_positive("f", "k", f64::NAN).is_err());
+        assert_eq!(require_positive("f", "k", 2.0).unwrap(), 2.0);
+        assert!(require_non_negative("f", "k", -1e-9).is_err());
+        assert_eq!(require_non_negative("f", "k", 0.0).unwrap(), 0.0);
+        assert!(require_in_range("f", "k", 1.5, 0.0, 1.0).is_err());
+        assert_eq!(require_in_range("f", "k", 1.0, 0.0, 1.0).unwrap(), 1.0);
+    }
+}
