@@ -1,0 +1,114 @@
+//! Scenario pieces shared by several experiments (robot motion, beacons, timing),
+//! with their conversion into the checked parameter types of the library crates.
+
+use fathom_traj::velocity_command::{VelocityCommandMotion, VelocityCommandParams};
+use nalgebra::Vector3;
+use rand::Rng;
+use serde::{Deserialize, Serialize};
+
+use crate::SimError;
+use crate::scenario::{require_non_negative, require_positive};
+
+/// `[motion]`: the velocity-command kinematic motion of the beacons paper
+/// (Tables 1 and 9).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MotionToml {
+    /// Run length, s.
+    pub duration_s: f64,
+    /// Motion integration step, s.
+    pub step_s: f64,
+    /// Commanded body velocity `(u, v, w, p, q, r)`, m/s and rad/s.
+    pub command: [f64; 6],
+    /// Per-step Gaussian motion noise on each command component (same units).
+    pub motion_sigma: [f64; 6],
+}
+
+impl MotionToml {
+    /// Checks the values and converts them into the trajectory crate's parameters;
+    /// `file` and `table` name the place for error messages.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the key.
+    pub fn to_params(&self, file: &str, table: &str) -> Result<VelocityCommandParams, SimError> {
+        require_positive(file, &format!("{table}.duration_s"), self.duration_s)?;
+        require_positive(file, &format!("{table}.step_s"), self.step_s)?;
+        for (k, v) in self.command.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(SimError::invalid(
+                    file,
+                    format!("{table}.command[{k}]"),
+                    format!("must be finite, got {v}"),
+                ));
+            }
+        }
+        for (k, v) in self.motion_sigma.iter().enumerate() {
+            require_non_negative(file, &format!("{table}.motion_sigma[{k}]"), *v)?;
+        }
+        Ok(VelocityCommandParams {
+            duration: self.duration_s,
+            dt: self.step_s,
+            command: self.command,
+            motion_sigma: self.motion_sigma,
+            ..VelocityCommandParams::default()
+        })
+    }
+}
+
+/// Generates the motion for one run from checked parameters.
+///
+/// # Errors
+/// [`SimError::Model`] wrapping the trajectory crate's error.
+pub fn generate_motion(
+    params: &VelocityCommandParams,
+    rng: &mut impl Rng,
+) -> Result<VelocityCommandMotion, SimError> {
+    let checked = params
+        .check()
+        .map_err(|e| SimError::model("motion parameters", e))?;
+    VelocityCommandMotion::generate(&checked, rng).map_err(|e| SimError::model("motion", e))
+}
+
+/// `[beacons]`: beacon positions in NED, m.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BeaconsToml {
+    /// One `[north, east, down]` triple per beacon.
+    pub positions: Vec<[f64; 3]>,
+}
+
+impl BeaconsToml {
+    /// Checks there is at least one beacon and every coordinate is finite.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the key and index.
+    pub fn to_positions(&self, file: &str, table: &str) -> Result<Vec<Vector3<f64>>, SimError> {
+        if self.positions.is_empty() {
+            return Err(SimError::invalid(
+                file,
+                format!("{table}.positions"),
+                "needs at least one beacon",
+            ));
+        }
+        self.positions
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                if p.iter().all(|v| v.is_finite()) {
+                    Ok(Vector3::new(p[0], p[1], p[2]))
+                } else {
+                    Err(SimError::invalid(
+                        file,
+                        format!("{table}.positions[{k}]"),
+                        format!("coordinates must be finite, got {p:?}"),
+                    ))
+                }
+            })
+            .collect()
+    }
+}
+
+/// Formats a number for Markdown with `decimals` decimals.
+pub fn f(x: f64, decimals: usize) -> String {
+    format!("{x:.decimals$}")
+}

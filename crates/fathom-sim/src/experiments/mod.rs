@@ -1,0 +1,16 @@
+//! The paper experiments run by `cargo xtask paper`, and their registry.
+//!
+//! Each experiment module owns its scenario schema (serde structs with
+//! `deny_unknown_fields`), converts it into the checked parameter types of the
+//! library crates, runs the Monte Carlo batch and writes figures and CSV files;
+//! [`crate::run_paper`] writes `summary.json` and `report.md` from what it returns.
+
+pub mod common;
+pub mod noise;
+
+use crate::experiment::Experiment;
+
+/// All registered paper experiments, in report order.
+pub fn registry() -> Vec<Experiment> {
+    vec![noise::EXPERIMENT]
+}
