@@ -1,1 +1,9 @@
-//! e2e
+//! End-to-end tests of fathom: whole experiments run through the same driver as
+//! `cargo xtask paper`, on reduced scenarios, checking the output contract,
+//! determinism across thread counts and the handling of malformed scenario files.
+//!
+//! One test binary for the whole workspace; each experiment has its own module.
+
+mod support;
+
+mod noise;

@@ -844,11 +844,20 @@ impl Timeline {
             }
         };
         let n = self.rows.len();
+        // Room for the row labels, drawn left of the plot area (about 8 px per
+        // character at the label font size).
+        let longest = self
+            .rows
+            .iter()
+            .map(|r| r.0.chars().count())
+            .max()
+            .unwrap_or(0);
+        let margin_left = (8 * longest as u32 + 24).max(130);
         render(path, self.size, |root| {
             let mut chart = ChartBuilder::on(root)
                 .caption(&self.title, title_style(20))
                 .margin(12)
-                .margin_left(130)
+                .margin_left(margin_left)
                 .x_label_area_size(45)
                 .build_cartesian_2d(t0..t1, 0.0..n as f64)
                 .map_err(de)?;
