@@ -43,6 +43,7 @@
 //!   [`run_paper`];
 //! - [`experiments`]: the registered paper experiments.
 
+pub mod data;
 pub mod error;
 pub mod experiment;
 pub mod experiments;
