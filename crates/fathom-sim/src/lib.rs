@@ -50,6 +50,7 @@ pub mod experiments;
 pub mod montecarlo;
 pub mod output;
 pub mod plot;
+pub mod replay;
 pub mod scenario;
 
 pub use error::SimError;
