@@ -159,7 +159,8 @@ pub struct AnalysisToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensitivityToml {
-    /// Monte Carlo runs per sweep value (capped by `--runs`).
+    /// Monte Carlo runs per sweep value (with `--runs N`: `ceil(N / 4)`, at least 2,
+    /// at most this).
     pub runs: usize,
     /// DVL velocity noise values, m/s (filters keep their tuning).
     pub dvl_vel_noise_mps: Vec<f64>,
@@ -367,7 +368,7 @@ impl FusionScenario {
                 "analysis.min_relative_improvement",
                 a.min_relative_improvement,
             )?,
-            sensitivity_runs: runs_override.map_or(s.runs, |r| r.clamp(2, s.runs)),
+            sensitivity_runs: runs_override.map_or(s.runs, |r| r.div_ceil(4).clamp(2, s.runs)),
             sweep_dvl_noise: sweep(file, "sensitivity.dvl_vel_noise_mps", &s.dvl_vel_noise_mps)?,
             sweep_v_dvl: sweep(file, "sensitivity.filter_v_dvl_m", &s.filter_v_dvl_m)?,
         })
