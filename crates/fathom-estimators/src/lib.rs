@@ -49,6 +49,7 @@
 //! allocate except to build an error. The sequential update allocates its report; the
 //! stacked update allocates faer/nalgebra dynamic matrices.
 
+pub mod architectures;
 pub mod error;
 pub mod fusion;
 pub mod gating;

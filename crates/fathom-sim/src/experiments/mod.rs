@@ -6,11 +6,12 @@
 //! [`crate::run_paper`] writes `summary.json` and `report.md` from what it returns.
 
 pub mod common;
+pub mod fusion;
 pub mod noise;
 
 use crate::experiment::Experiment;
 
 /// All registered paper experiments, in report order.
 pub fn registry() -> Vec<Experiment> {
-    vec![noise::EXPERIMENT]
+    vec![fusion::EXPERIMENT, noise::EXPERIMENT]
 }
