@@ -50,11 +50,14 @@
 //! stacked update allocates faer/nalgebra dynamic matrices.
 
 pub mod error;
+pub mod error_state;
 pub mod fusion;
 pub mod gating;
+pub mod integrated_nav;
 pub mod kalman;
 pub mod models;
 pub mod stacked;
+pub mod velocity_filter;
 
 #[cfg(test)]
 mod consistency_tests;
