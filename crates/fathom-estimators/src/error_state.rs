@@ -180,7 +180,12 @@ mod tests {
         // Gated: a 100-sigma outlier is rejected.
         let gate = GateThreshold::from_chi_square_probability(0.999, 3).unwrap();
         let out = f
-            .update_velocity(&Vector3::zeros(), &Vector3::new(100.0, 0.0, 0.0), &r, Some(gate))
+            .update_velocity(
+                &Vector3::zeros(),
+                &Vector3::new(100.0, 0.0, 0.0),
+                &r,
+                Some(gate),
+            )
             .unwrap();
         assert!(!out.is_accepted());
         let phi = ErrorCovariance::identity();

@@ -1,7 +1,8 @@
 //! The 9-state integrated navigation filter of the velocity-filter paper (spec C,
 //! paper §2.4): state `x = [p (3), v (3), b_a (3)]`, position and velocity in a local
 //! level NED frame (north and east as distances travelled, down as depth), `b_a` the
-//! accelerometer bias in the body frame.
+//! acceleration bias, modelled in the body frame (an accelerometer bias) or in the
+//! navigation frame ([`AccelBiasFrame`]; with `Nav`, `C_k` below is `I`).
 //!
 //! # Model
 //!
@@ -46,6 +47,17 @@ pub type Vector9 = SVector<f64, 9>;
 /// A 9x9 matrix of this filter.
 pub type Matrix9 = SMatrix<f64, 9, 9>;
 
+/// The frame in which the 9-state filter models its acceleration bias.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum AccelBiasFrame {
+    /// An accelerometer bias (body frame): enters as `C_b^n b_a`.
+    #[default]
+    Body,
+    /// A bias of the navigation-frame acceleration input (e.g. from an uncorrected INS
+    /// tilt): enters as `b_a` directly (`C_k` replaced by `I` in the model).
+    Nav,
+}
+
 /// Unchecked parameters of the 9-state filter.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IntegratedNavParams {
@@ -55,6 +67,8 @@ pub struct IntegratedNavParams {
     pub accel_bias_rw_psd: f64,
     /// Initial sigmas: position (m), velocity (m/s), accelerometer bias (m/s^2), all > 0.
     pub sigma0: [f64; 3],
+    /// Frame of the bias state.
+    pub bias_frame: AccelBiasFrame,
 }
 
 impl IntegratedNavParams {
@@ -161,6 +175,11 @@ impl IntegratedNavFilter {
             |r, c| nav_from_body[(r, c)],
             t_new,
         )?;
+        let c = match self.params.bias_frame {
+            AccelBiasFrame::Body => *nav_from_body,
+            AccelBiasFrame::Nav => Matrix3::identity(),
+        };
+        let nav_from_body = &c;
         let b = self.x.fixed_rows::<3>(6).into_owned();
         let v_old = self.x.fixed_rows::<3>(3).into_owned();
         let v_new = v_old + dv_in_nav - nav_from_body * b * dt;
@@ -285,6 +304,7 @@ mod tests {
             accel_psd: 1e-6,
             accel_bias_rw_psd: 1e-12,
             sigma0: [0.1, 0.01, 1e-3],
+            bias_frame: AccelBiasFrame::Body,
         }
         .check()
         .unwrap()
@@ -302,8 +322,7 @@ mod tests {
                 0.0,
             )
             .unwrap();
-            f.x.fixed_rows_mut::<3>(6)
-                .copy_from(&x0.fixed_rows::<3>(6));
+            f.x.fixed_rows_mut::<3>(6).copy_from(&x0.fixed_rows::<3>(6));
             for k in 0..10 {
                 let c = *nalgebra::Rotation3::from_euler_angles(0.1, 0.0, 0.3 * k as f64).matrix();
                 f.propagate(&Vector3::new(0.01, -0.02, 0.0), &c, 0.01)
@@ -331,8 +350,8 @@ mod tests {
     /// With a constant accelerometer bias, velocity updates let the filter learn it.
     #[test]
     fn learns_a_constant_bias_from_velocity_updates() {
-        let mut f = IntegratedNavFilter::new(&cfg(), &Vector3::zeros(), &Vector3::zeros(), 0.0)
-            .unwrap();
+        let mut f =
+            IntegratedNavFilter::new(&cfg(), &Vector3::zeros(), &Vector3::zeros(), 0.0).unwrap();
         let bias = Vector3::new(1e-3, -5e-4, 0.0);
         let c = Matrix3::identity();
         let r = Matrix3::identity() * 1e-6;

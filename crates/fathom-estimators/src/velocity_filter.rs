@@ -64,7 +64,10 @@ impl VelocityFilterParams {
     /// [`EstimatorError::OutOfRange`] / [`EstimatorError::Core`] naming the parameter.
     pub fn check(&self) -> Result<VelocityFilterConfig, EstimatorError> {
         use fathom_core::error::{ensure_finite, ensure_non_negative, ensure_positive};
-        ensure_finite("vkf speed0, sf0, b0", [self.speed0, self.sf0, self.b0].iter())?;
+        ensure_finite(
+            "vkf speed0, sf0, b0",
+            [self.speed0, self.sf0, self.b0].iter(),
+        )?;
         for (i, s) in self.sigma0.iter().enumerate() {
             ensure_positive(&format!("vkf sigma0[{i}]"), *s)?;
         }
@@ -341,7 +344,12 @@ mod tests {
     /// Runs the VKF at 5 Hz: valid DVL (forward speed + N(0, 0.02^2) + `dvl_bias`)
     /// until `t_invalid`, then no DVL until `t_end`. Returns the filter at
     /// `t_invalid` and at `t_end`.
-    fn run(seed: u64, dvl_bias: f64, t_invalid: f64, t_end: f64) -> (VelocityFilter, VelocityFilter) {
+    fn run(
+        seed: u64,
+        dvl_bias: f64,
+        t_invalid: f64,
+        t_end: f64,
+    ) -> (VelocityFilter, VelocityFilter) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let cfg = params().check().unwrap();
         let mut vkf = VelocityFilter::new(&cfg, 0.0).unwrap();
@@ -413,8 +421,8 @@ mod tests {
     #[test]
     fn switching_box_selects_and_rotates() {
         let sb = SwitchingBox::new(100.0, 0.05).unwrap();
-        let c = *nalgebra::Rotation3::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2)
-            .matrix();
+        let c =
+            *nalgebra::Rotation3::from_euler_angles(0.0, 0.0, std::f64::consts::FRAC_PI_2).matrix();
         let dvl = Vector3::new(1.0, 2.0, 3.0);
         let r = Matrix3::identity() * 4e-4;
         let a = sb.select(99.0, &dvl, &r, (5.0, 1e-4), &c);

@@ -122,10 +122,7 @@ impl ImuSpecParams {
                 "imu.accel_bias_instability_mg",
                 p.accel_bias_instability_mg,
             )?),
-            accel_bias_tau: check_positive(
-                "imu.accel_bias_corr_time_s",
-                p.accel_bias_corr_time_s,
-            )?,
+            accel_bias_tau: check_positive("imu.accel_bias_corr_time_s", p.accel_bias_corr_time_s)?,
             accel_vrw: check_sigma("imu.accel_vrw_mps_per_sqrt_s", p.accel_vrw_mps_per_sqrt_s)?,
             accel_scale_factor: 1e-6
                 * check_sigma("imu.accel_scale_factor_ppm", p.accel_scale_factor_ppm)?,
@@ -288,7 +285,11 @@ mod tests {
     #[test]
     fn data_sheet_units_are_converted_once() {
         let s = ImuSpecParams::hg1700().scaled(0.1).check().unwrap();
-        assert_relative_eq!(s.gyro_bias, 0.1f64.to_radians() / 3600.0, max_relative = 1e-12);
+        assert_relative_eq!(
+            s.gyro_bias,
+            0.1f64.to_radians() / 3600.0,
+            max_relative = 1e-12
+        );
         assert_relative_eq!(
             s.gyro_arw,
             0.0125f64.to_radians() / 60.0,

@@ -152,7 +152,11 @@ impl BottomLockDvl {
         for i in 0..3 {
             let white = gauss(rng, self.params.sigma);
             let u: f64 = rng.random();
-            let garbage = if bottom_lock { 0.0 } else { g * (2.0 * u - 1.0) };
+            let garbage = if bottom_lock {
+                0.0
+            } else {
+                g * (2.0 * u - 1.0)
+            };
             v[i] = (1.0 + self.scale_factor) * true_vel_in_nav[i] + self.bias[i] + white + garbage;
         }
         Ok(DvlReading {

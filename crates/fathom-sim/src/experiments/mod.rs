@@ -7,10 +7,11 @@
 
 pub mod common;
 pub mod noise;
+pub mod vkf;
 
 use crate::experiment::Experiment;
 
 /// All registered paper experiments, in report order.
 pub fn registry() -> Vec<Experiment> {
-    vec![noise::EXPERIMENT]
+    vec![noise::EXPERIMENT, vkf::EXPERIMENT]
 }
