@@ -8,3 +8,4 @@ mod support;
 
 mod noise;
 mod fusion;
+mod vkf;

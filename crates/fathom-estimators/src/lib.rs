@@ -51,11 +51,14 @@
 
 pub mod architectures;
 pub mod error;
+pub mod error_state;
 pub mod fusion;
 pub mod gating;
+pub mod integrated_nav;
 pub mod kalman;
 pub mod models;
 pub mod stacked;
+pub mod velocity_filter;
 
 #[cfg(test)]
 mod consistency_tests;

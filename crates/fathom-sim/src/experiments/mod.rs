@@ -8,10 +8,11 @@
 pub mod common;
 pub mod fusion;
 pub mod noise;
+pub mod vkf;
 
 use crate::experiment::Experiment;
 
 /// All registered paper experiments, in report order.
 pub fn registry() -> Vec<Experiment> {
-    vec![fusion::EXPERIMENT, noise::EXPERIMENT]
+    vec![fusion::EXPERIMENT, noise::EXPERIMENT, vkf::EXPERIMENT]
 }
