@@ -49,11 +49,14 @@
 //! allocate except to build an error. The sequential update allocates its report; the
 //! stacked update allocates faer/nalgebra dynamic matrices.
 
+pub mod beacon_ekf;
+pub mod ekf;
 pub mod error;
 pub mod fusion;
 pub mod gating;
 pub mod kalman;
 pub mod models;
+pub mod schemes;
 pub mod stacked;
 
 #[cfg(test)]
