@@ -475,9 +475,11 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
         let Some((_, at)) = self.group_stamp.take() else {
             return Ok(());
         };
-        let group = std::mem::take(&mut self.group);
+        let mut group = std::mem::take(&mut self.group);
         let outcomes = self.update_individual(&group)?;
         self.log_outcomes(&group, at, &outcomes);
+        group.clear();
+        self.group = group; // keep the allocation
         Ok(())
     }
 

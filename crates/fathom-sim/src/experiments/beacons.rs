@@ -414,6 +414,19 @@ pub fn run_scheme(
     scheme: UpdateScheme,
     initial_error: &Vector4<f64>,
 ) -> Result<SchemeRun, SimError> {
+    let ev = events(data, &setup.beacons);
+    run_scheme_on(truth, data, &ev, setup, scheme, initial_error)
+}
+
+/// [`run_scheme`] on a prebuilt event stream (`events(data, ..)`), shared by schemes.
+fn run_scheme_on(
+    truth: &VelocityCommandMotion,
+    data: &BeaconSuiteData,
+    ev: &[Event<DvlAhrsSample, BeaconMeasurement>],
+    setup: &FilterSetup,
+    scheme: UpdateScheme,
+    initial_error: &Vector4<f64>,
+) -> Result<SchemeRun, SimError> {
     let k = data.ranges.len();
     if setup.beacons.len() != k || setup.channel_cov.nrows() != k + 1 {
         return Err(SimError::invalid_argument(
@@ -449,7 +462,6 @@ pub fn run_scheme(
     .map_err(|e| SimError::model("update scheme", e))?;
     let mut filter = SchemeFilter::new(ekf, config);
 
-    let ev = events(data, &setup.beacons);
     let n_eval = ((truth.end_time() - t0) / setup.settings.epoch_period + 1e-9).floor() as usize;
     let mut out = SchemeRun {
         times: Vec::with_capacity(n_eval),
@@ -698,9 +710,10 @@ fn simulate_run(checked: &Checked, rng: &mut ChaCha8Rng) -> Result<RunDetail, Si
         let mut case_rng = rng.clone();
         let data = simulate_beacon_suite(&motion, &case.config, &mut case_rng)
             .map_err(|e| SimError::model(format!("sensor suite, case {}", case.name), e))?;
+        let ev = events(&data, &case.setup.beacons);
         let runs = UpdateScheme::ALL
             .iter()
-            .map(|&s| run_scheme(&motion, &data, &case.setup, s, &initial_error))
+            .map(|&s| run_scheme_on(&motion, &data, &ev, &case.setup, s, &initial_error))
             .collect::<Result<Vec<_>, _>>()?;
         cases.push((data, runs));
     }
