@@ -6,6 +6,7 @@
 
 mod support;
 
-mod noise;
+mod beacons;
 mod fusion;
+mod noise;
 mod vkf;

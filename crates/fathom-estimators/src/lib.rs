@@ -50,6 +50,8 @@
 //! stacked update allocates faer/nalgebra dynamic matrices.
 
 pub mod architectures;
+pub mod beacon_ekf;
+pub mod ekf;
 pub mod error;
 pub mod error_state;
 pub mod fusion;
@@ -57,6 +59,7 @@ pub mod gating;
 pub mod integrated_nav;
 pub mod kalman;
 pub mod models;
+pub mod schemes;
 pub mod stacked;
 pub mod velocity_filter;
 

@@ -5,6 +5,7 @@
 //! library crates, runs the Monte Carlo batch and writes figures and CSV files;
 //! [`crate::run_paper`] writes `summary.json` and `report.md` from what it returns.
 
+pub mod beacons;
 pub mod common;
 pub mod fusion;
 pub mod noise;
@@ -14,5 +15,10 @@ use crate::experiment::Experiment;
 
 /// All registered paper experiments, in report order.
 pub fn registry() -> Vec<Experiment> {
-    vec![fusion::EXPERIMENT, noise::EXPERIMENT, vkf::EXPERIMENT]
+    vec![
+        fusion::EXPERIMENT,
+        noise::EXPERIMENT,
+        beacons::EXPERIMENT,
+        vkf::EXPERIMENT,
+    ]
 }
