@@ -6,5 +6,8 @@
 
 mod support;
 
+mod beacons;
+mod fusion;
 mod noise;
 mod plaza;
+mod vkf;

@@ -157,12 +157,21 @@ fn experiment_runs_on_a_truncated_copy_and_writes_the_contract_outputs() {
         assert!(dir.join(file).is_file(), "missing {file}");
     }
     let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
-    for needle in ["Range bias", "Huber", "lock", "relative to t0", "SC-no-bias"] {
+    for needle in [
+        "Range bias",
+        "Huber",
+        "lock",
+        "relative to t0",
+        "SC-no-bias",
+    ] {
         assert!(report.contains(needle), "report lacks {needle:?}");
     }
     let csv = std::fs::read_to_string(dir.join("estimates.csv")).unwrap();
     let header = csv.lines().next().unwrap();
-    assert!(header.starts_with("time_s,true_x_m,true_y_m,DR_x_m"), "{header}");
+    assert!(
+        header.starts_with("time_s,true_x_m,true_y_m,DR_x_m"),
+        "{header}"
+    );
     assert!(header.contains("SC_range_scale"), "{header}");
 }
 
@@ -233,7 +242,9 @@ fn renumbered_beacons_and_shifted_clock_give_identical_errors() {
     let mut mat = read_mat(&files.mat).unwrap();
     mat.beacons[0].x += 1.0;
     let rows = |p: &[fathom::sim::data::plaza::PoseRecord]| -> Vec<Vec<f64>> {
-        p.iter().map(|r| vec![r.time, r.x, r.y, r.heading]).collect()
+        p.iter()
+            .map(|r| vec![r.time, r.x, r.y, r.heading])
+            .collect()
     };
     write_mat_v5(
         &files.mat,
@@ -280,5 +291,8 @@ fn bad_settings_are_named() {
     write_scenario(&root, "plaza.toml", &scenario);
     let e = run_experiment(&root, "plaza", Some(1)).unwrap_err();
     let s = crate::support::chain(&e);
-    assert!(s.contains("robust.huber_k") && s.contains("must be > 0"), "{s}");
+    assert!(
+        s.contains("robust.huber_k") && s.contains("must be > 0"),
+        "{s}"
+    );
 }

@@ -104,8 +104,8 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
             Failure::Run(e)
         }
     })?;
-    let result = replay(&log, &settings)
-        .map_err(|e| Failure::Run(anyhow!(e).context("replay failed")))?;
+    let result =
+        replay(&log, &settings).map_err(|e| Failure::Run(anyhow!(e).context("replay failed")))?;
     let outputs = write_outputs(&result, &args.out)
         .and_then(|o| write_standalone(&o, &args.out, &args.dir, &label).map(|()| o))
         .map_err(|e| Failure::Run(anyhow!(e).context("cannot write the outputs")))?;
@@ -214,12 +214,18 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("fathom-cli-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let bad = dir.join("bad.toml");
-        std::fs::write(&bad, DEFAULT_PLAZA_CONFIG.replace("sigma_m = 1.0", "sigma_m = -1.0"))
-            .unwrap();
+        std::fs::write(
+            &bad,
+            DEFAULT_PLAZA_CONFIG.replace("sigma_m = 1.0", "sigma_m = -1.0"),
+        )
+        .unwrap();
         match load_settings(Some(&bad)) {
             Err(Failure::Usage(e)) => {
                 let s = format!("{e:#}");
-                assert!(s.contains("ranges.sigma_m") && s.contains("bad.toml"), "{s}");
+                assert!(
+                    s.contains("ranges.sigma_m") && s.contains("bad.toml"),
+                    "{s}"
+                );
             }
             other => panic!("expected a usage error, got {other:?}"),
         }

@@ -49,12 +49,21 @@
 //! allocate except to build an error. The sequential update allocates its report; the
 //! stacked update allocates faer/nalgebra dynamic matrices.
 
+pub mod architectures;
+pub mod beacon_ekf;
+pub mod ekf;
 pub mod error;
+pub mod error_state;
 pub mod fusion;
 pub mod gating;
+pub mod integrated_nav;
 pub mod kalman;
 pub mod models;
+pub mod robust;
+pub mod schemes;
 pub mod stacked;
+pub mod velocity_filter;
+pub mod wheel_odometry;
 
 #[cfg(test)]
 mod consistency_tests;

@@ -140,7 +140,12 @@ impl LockoutMonitor {
     /// variance (`e <= k`); otherwise (rejected or down-weighted) it extends the runs.
     /// Returns the inflation factor to apply now, if this measurement completes a run
     /// of `after_rejections` overall or on its channel (module docs).
-    pub fn record(&mut self, channel: usize, consistent: bool, policy: &RobustPolicy) -> Option<f64> {
+    pub fn record(
+        &mut self,
+        channel: usize,
+        consistent: bool,
+        policy: &RobustPolicy,
+    ) -> Option<f64> {
         if self.per_channel.len() <= channel {
             self.per_channel.resize(channel + 1, 0);
         }
@@ -299,7 +304,10 @@ mod tests {
             // Huber + recovery: a few inflations open the gate, then the fix converges.
             let (err, rejected, recoveries) = locked_start(scheme, Some(policy()));
             assert!(err < 0.1, "{scheme:?}: {err}");
-            assert!(recoveries >= 1 && rejected < 50, "{scheme:?}: {recoveries} {rejected}");
+            assert!(
+                recoveries >= 1 && rejected < 50,
+                "{scheme:?}: {recoveries} {rejected}"
+            );
         }
     }
 

@@ -57,7 +57,10 @@ impl WheelOdometryParams {
         use fathom_core::error::ensure_non_negative;
         ensure_non_negative("distance_sigma_per_sqrt_m", self.distance_sigma_per_sqrt_m)?;
         ensure_non_negative("heading_sigma_per_sqrt_m", self.heading_sigma_per_sqrt_m)?;
-        ensure_non_negative("heading_sigma_per_sqrt_rad", self.heading_sigma_per_sqrt_rad)?;
+        ensure_non_negative(
+            "heading_sigma_per_sqrt_rad",
+            self.heading_sigma_per_sqrt_rad,
+        )?;
         for s in &self.calibration_random_walk {
             ensure_non_negative("calibration_random_walk", *s)?;
         }
@@ -65,11 +68,7 @@ impl WheelOdometryParams {
             var_d_per_m: self.distance_sigma_per_sqrt_m.powi(2),
             var_h_per_m: self.heading_sigma_per_sqrt_m.powi(2),
             var_h_per_rad: self.heading_sigma_per_sqrt_rad.powi(2),
-            calibration_psd: self
-                .calibration_random_walk
-                .iter()
-                .map(|s| s * s)
-                .collect(),
+            calibration_psd: self.calibration_random_walk.iter().map(|s| s * s).collect(),
         })
     }
 }
@@ -324,7 +323,10 @@ mod tests {
     fn jacobian_matches_finite_differences() {
         let m = model(2);
         let x = Vector5::new(1.0, -2.0, 2.9, 0.4, 0.05);
-        let rate = OdometryRate { speed: 1.5, turn_rate: 0.4 };
+        let rate = OdometryRate {
+            speed: 1.5,
+            turn_rate: 0.4,
+        };
         let p = MotionModel::<5>::propagate(&m, &x, &rate, 0.3).unwrap();
         let eps = 1e-7;
         for j in 0..5 {

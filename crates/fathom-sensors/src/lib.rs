@@ -48,11 +48,13 @@
 //! covariance), [`integrated`] (INS and DVL dead reckoning).
 
 pub mod error;
+pub mod inertial;
 pub mod integrated;
 pub mod models;
 pub mod noise;
 pub mod schedule;
 pub mod suite;
+pub mod underwater;
 
 pub use error::SensorError;
 pub use suite::{

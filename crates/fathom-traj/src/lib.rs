@@ -38,6 +38,7 @@
 
 pub mod error;
 pub mod fusion_mission;
+pub mod seabed;
 pub mod spline;
 pub mod spline_trajectory;
 pub mod state;
@@ -48,6 +49,7 @@ pub use fusion_mission::{
     CheckedFusionMissionParams, FusionMission, FusionMissionParams, detect_course_changes,
     generate_fusion_mission,
 };
+pub use seabed::SeabedProfile;
 pub use spline::{CubicSpline, CubicSpline3, SplinePoint, SplinePoint3};
 pub use spline_trajectory::{SplineTrajectory, body_rates_from_euler_rates_matrix};
 pub use state::{Trajectory, TrueState};

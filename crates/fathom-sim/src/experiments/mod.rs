@@ -5,13 +5,22 @@
 //! library crates, runs the Monte Carlo batch and writes figures and CSV files;
 //! [`crate::run_paper`] writes `summary.json` and `report.md` from what it returns.
 
+pub mod beacons;
 pub mod common;
+pub mod fusion;
 pub mod noise;
 pub mod plaza;
+pub mod vkf;
 
 use crate::experiment::Experiment;
 
 /// All registered paper experiments, in report order.
 pub fn registry() -> Vec<Experiment> {
-    vec![noise::EXPERIMENT, plaza::EXPERIMENT]
+    vec![
+        fusion::EXPERIMENT,
+        noise::EXPERIMENT,
+        beacons::EXPERIMENT,
+        vkf::EXPERIMENT,
+        plaza::EXPERIMENT,
+    ]
 }

@@ -60,8 +60,9 @@ fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
             ),
         });
     };
-    let log = PlazaLog::read_dir(&dir, settings.range_order)
-        .map_err(|e| SimError::model(format!("reading the Plaza data in `{}`", dir.display()), e))?;
+    let log = PlazaLog::read_dir(&dir, settings.range_order).map_err(|e| {
+        SimError::model(format!("reading the Plaza data in `{}`", dir.display()), e)
+    })?;
     let result = replay(&log, &settings)?;
     let out = write_outputs(&result, &ctx.out_dir)?;
     Ok(ExperimentOutput {

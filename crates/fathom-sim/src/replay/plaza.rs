@@ -504,8 +504,11 @@ impl PreparedLog {
                 skipped_odometry += 1;
                 continue;
             }
-            let rate = OdometryRate::from_increments(step.delta_distance, step.delta_heading, t - prev)
-                .map_err(|e| SimError::model(format!("odometry row at t = {} s", step.time), e))?;
+            let rate =
+                OdometryRate::from_increments(step.delta_distance, step.delta_heading, t - prev)
+                    .map_err(|e| {
+                        SimError::model(format!("odometry row at t = {} s", step.time), e)
+                    })?;
             inputs.push((prev, rate));
             prev = t;
         }
@@ -553,7 +556,12 @@ impl PreparedLog {
             .iter()
             .enumerate()
             .map(|(k, i)| (i.0, Kind::Input(k)))
-            .chain(self.eval.iter().enumerate().map(|(k, e)| (e.0, Kind::Eval(k))))
+            .chain(
+                self.eval
+                    .iter()
+                    .enumerate()
+                    .map(|(k, e)| (e.0, Kind::Eval(k))),
+            )
             .collect();
         if with_ranges {
             ev.extend(
@@ -721,8 +729,13 @@ fn run_filter<const N: usize>(
 ) -> Result<MethodRun, SimError> {
     let ctx = |e| SimError::model(format!("filter `{}`", v.name), e);
     let cal = v.calibration;
-    let ekf = Ekf::<N, _>::new(prior::<N>(prep, s, cal)?, 0.0, motion(s, cal)?, OdometryRate::default())
-        .map_err(ctx)?;
+    let ekf = Ekf::<N, _>::new(
+        prior::<N>(prep, s, cal)?,
+        0.0,
+        motion(s, cal)?,
+        OdometryRate::default(),
+    )
+    .map_err(ctx)?;
     let c = prep.beacons.len();
     let var = s.range_sigma.powi(2);
     let cov = s.correlation_sigma.powi(2);
@@ -922,7 +935,10 @@ pub fn analyse_ranges(log: &PlazaLog) -> Result<RangeAnalysis, SimError> {
     let robust_sigma = 1.4826 * median(&dev);
     let dm = samples.iter().map(|s| s.1).sum::<f64>() / nf;
     let sxx = samples.iter().map(|s| (s.1 - dm).powi(2)).sum::<f64>();
-    let sxy = samples.iter().map(|s| (s.1 - dm) * (s.2 - mean)).sum::<f64>();
+    let sxy = samples
+        .iter()
+        .map(|s| (s.1 - dm) * (s.2 - mean))
+        .sum::<f64>();
     let b = if sxx > 0.0 { sxy / sxx } else { 0.0 };
     let a = mean - b * dm;
     let res: Vec<f64> = samples.iter().map(|s| s.2 - a - b * s.1).collect();
@@ -1030,7 +1046,11 @@ pub fn replay(log: &PlazaLog, settings: &PlazaSettings) -> Result<PlazaReplay, S
         methods,
         beacons: log.beacons.clone(),
         range_order_breaks: log.range_order_breaks.clone(),
-        log_ranges: log.ranges.iter().map(|r| (r.time, r.beacon, r.range)).collect(),
+        log_ranges: log
+            .ranges
+            .iter()
+            .map(|r| (r.time, r.beacon, r.range))
+            .collect(),
         rows: (log.odometry.len(), log.ranges.len(), log.ground_truth.len()),
         data_name,
     })

@@ -145,11 +145,11 @@ fn thin(n: usize) -> usize {
 fn write_figures(r: &PlazaReplay, dir: &Path) -> Result<(), SimError> {
     let p = &r.prepared;
     let step = thin(p.eval.len());
-    let truth = xy_series("ground truth", p.eval.iter().step_by(step).map(|e| (e.1, e.2)));
-    let beacons = Series::new(
-        "beacons",
-        r.beacons.iter().map(|b| (b.x, b.y)).collect(),
+    let truth = xy_series(
+        "ground truth",
+        p.eval.iter().step_by(step).map(|e| (e.1, e.2)),
     );
+    let beacons = Series::new("beacons", r.beacons.iter().map(|b| (b.x, b.y)).collect());
     let mut plan = PlanPlot::new(
         format!("{}: estimated and true path", r.data_name),
         "x [m]",
@@ -224,7 +224,11 @@ fn write_figures(r: &PlazaReplay, dir: &Path) -> Result<(), SimError> {
     scatter.size = (900, 560);
     scatter.write_svg(dir.join("range_error_vs_distance.svg"))?;
 
-    let res: Vec<f64> = a.samples.iter().map(|s| s.2 - a.fit.0 - a.fit.1 * s.1).collect();
+    let res: Vec<f64> = a
+        .samples
+        .iter()
+        .map(|s| s.2 - a.fit.0 - a.fit.1 * s.1)
+        .collect();
     let lo = res.iter().copied().fold(f64::INFINITY, f64::min).floor();
     let hi = res.iter().copied().fold(f64::NEG_INFINITY, f64::max).ceil();
     let bins = (((hi - lo) / 0.1).round() as usize).clamp(1, 400);
@@ -598,8 +602,14 @@ pub fn report_section(r: &PlazaReplay) -> String {
          one range and the three schemes differ mainly in when a range is applied (its own \
          stamp for AS, the next epoch for SC/SI).\n",
         s.correlation_sigma,
-        f(p.ranges.len() as f64 / p.eval.last().map_or(1.0, |e| e.0), 2),
-        f(p.eval.last().map_or(1.0, |e| e.0) / p.ranges.len().max(1) as f64, 2),
+        f(
+            p.ranges.len() as f64 / p.eval.last().map_or(1.0, |e| e.0),
+            2
+        ),
+        f(
+            p.eval.last().map_or(1.0, |e| e.0) / p.ranges.len().max(1) as f64,
+            2
+        ),
         s.epoch,
     ));
     md

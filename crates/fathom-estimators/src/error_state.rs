@@ -1,0 +1,197 @@
+//! The 15-state error-state (indirect, feedback) INS filter for DVL / RPM velocity
+//! and depth aiding (spec C, "ESKF", beyond the paper).
+//!
+//! Error state `dx = [dr (0..3), dv (3..6), psi (6..9), b_a (9..12), b_g (12..15)]`,
+//! **estimated minus true**, in the layout and conventions of
+//! `fathom_ins::error_model` (position error in NED metres, `psi` the phi-angle
+//! attitude error, body-frame sensor errors). This crate does not depend on the
+//! INS crate: the caller computes the transition matrix `Phi` and the discrete
+//! process noise `Q_d` from the INS state (e.g. with `fathom_ins::error_model`) and
+//! passes them to [`ErrorStateFilter::predict`].
+//!
+//! Feedback: after each update the caller takes the estimated error with
+//! [`ErrorStateFilter::take_correction`] (which resets it to zero, keeping `P`),
+//! removes it from the INS state and adds the sensor-error estimates to the IMU
+//! correction. Between updates the error state is therefore zero and the prediction
+//! propagates `P` only.
+//!
+//! Measurements (with `y = INS - sensor`, so `y = H dx + noise`):
+//! - NED velocity: `y = v_ins - v_aid`, `H = [0 I 0 0 0]`;
+//! - depth: `y = depth_ins - depth_meas = dr_D`, `H = e_2`.
+
+use fathom_core::Gaussian;
+use nalgebra::{Matrix1, Matrix3, SMatrix, SVector, Vector1, Vector3};
+
+use crate::{EstimatorError, Gate, GateThreshold, KalmanFilter, UpdateInfo};
+
+/// Number of error states.
+pub const N_ERROR_STATES: usize = 15;
+/// Index of the first position-error state.
+pub const POS: usize = 0;
+/// Index of the first velocity-error state.
+pub const VEL: usize = 3;
+/// Index of the first attitude-error state.
+pub const ATT: usize = 6;
+/// Index of the first accelerometer-bias state.
+pub const ACCEL_BIAS: usize = 9;
+/// Index of the first gyro-bias state.
+pub const GYRO_BIAS: usize = 12;
+
+/// A 15-vector of the error state.
+pub type ErrorVector = SVector<f64, N_ERROR_STATES>;
+/// A 15x15 matrix (`Phi`, `Q_d`, `P`).
+pub type ErrorCovariance = SMatrix<f64, N_ERROR_STATES, N_ERROR_STATES>;
+
+/// The feedback error-state filter (see the module docs).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ErrorStateFilter {
+    kf: KalmanFilter<N_ERROR_STATES>,
+}
+
+impl ErrorStateFilter {
+    /// A filter at `t0` with zero error and covariance `p0`.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::new`] (e.g. `p0` not positive definite).
+    pub fn new(p0: &ErrorCovariance, t0: f64) -> Result<Self, EstimatorError> {
+        Ok(Self {
+            kf: KalmanFilter::new(Gaussian::new_unchecked(ErrorVector::zeros(), *p0), t0)?,
+        })
+    }
+
+    /// A diagonal initial covariance from per-block sigmas
+    /// `[position m, velocity m/s, attitude rad, accel bias m/s^2, gyro bias rad/s]`.
+    pub fn diagonal_covariance(sigmas: [f64; 5]) -> ErrorCovariance {
+        let mut d = ErrorVector::zeros();
+        for (block, s) in sigmas.iter().enumerate() {
+            for i in 0..3 {
+                d[3 * block + i] = s * s;
+            }
+        }
+        ErrorCovariance::from_diagonal(&d)
+    }
+
+    /// `P = Phi P Phi^T + Q_d` to time `t` (the error state is zero between updates).
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::predict`].
+    pub fn predict(
+        &mut self,
+        phi: &ErrorCovariance,
+        qd: &ErrorCovariance,
+        t: f64,
+    ) -> Result<(), EstimatorError> {
+        self.kf.predict(phi, qd, t)
+    }
+
+    /// Velocity update with the INS velocity `ins_vel_in_nav` and the aid
+    /// `aid_vel_in_nav` of covariance `r`; gated when `gate` is given.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::update_with_innovation_gated`].
+    pub fn update_velocity(
+        &mut self,
+        ins_vel_in_nav: &Vector3<f64>,
+        aid_vel_in_nav: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        gate: Option<GateThreshold>,
+    ) -> Result<Gate<3>, EstimatorError> {
+        let mut h = SMatrix::<f64, 3, N_ERROR_STATES>::zeros();
+        h.fixed_view_mut::<3, 3>(0, VEL)
+            .copy_from(&Matrix3::identity());
+        let nu = (ins_vel_in_nav - aid_vel_in_nav) - h * self.kf.state();
+        match gate {
+            Some(g) => self.kf.update_with_innovation_gated(&nu, &h, r, g),
+            None => self
+                .kf
+                .update_with_innovation(&nu, &h, r)
+                .map(Gate::Accepted),
+        }
+    }
+
+    /// Depth update: INS depth `ins_depth` (m, down) against the gauge's `depth`
+    /// of variance `r`.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::update_with_innovation`].
+    pub fn update_depth(
+        &mut self,
+        ins_depth: f64,
+        depth: f64,
+        r: f64,
+    ) -> Result<UpdateInfo<1>, EstimatorError> {
+        let mut h = SMatrix::<f64, 1, N_ERROR_STATES>::zeros();
+        h[(0, POS + 2)] = 1.0;
+        let nu = Vector1::new(ins_depth - depth) - h * self.kf.state();
+        self.kf.update_with_innovation(&nu, &h, &Matrix1::new(r))
+    }
+
+    /// The estimated error (for feedback); resets the error state to zero and keeps
+    /// the covariance.
+    ///
+    /// # Errors
+    /// Never in practice (zero is finite); kept for the filter's checked setter.
+    pub fn take_correction(&mut self) -> Result<ErrorVector, EstimatorError> {
+        let dx = *self.kf.state();
+        self.kf.set_state(ErrorVector::zeros())?;
+        Ok(dx)
+    }
+
+    /// The covariance `P`.
+    pub fn covariance(&self) -> &ErrorCovariance {
+        self.kf.covariance()
+    }
+
+    /// The filter time, s.
+    pub fn time(&self) -> f64 {
+        self.kf.time()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use approx::assert_abs_diff_eq;
+
+    /// A velocity error seen by the aid goes into the velocity-error state with the
+    /// Kalman gain, and feedback resets it.
+    #[test]
+    fn velocity_update_estimates_velocity_error_and_resets() {
+        let p0 = ErrorStateFilter::diagonal_covariance([1.0, 1.0, 1e-3, 1e-3, 1e-6]);
+        let mut f = ErrorStateFilter::new(&p0, 0.0).unwrap();
+        let r = Matrix3::identity();
+        let out = f
+            .update_velocity(
+                &Vector3::new(2.0, 0.0, 0.0),
+                &Vector3::new(1.0, 0.0, 0.0),
+                &r,
+                None,
+            )
+            .unwrap();
+        assert!(out.is_accepted());
+        let dx = f.take_correction().unwrap();
+        // Scalar: gain 1 / (1 + 1) on an innovation of 1 m/s.
+        assert_abs_diff_eq!(dx[VEL], 0.5, epsilon = 1e-12);
+        assert_abs_diff_eq!(f.covariance()[(VEL, VEL)], 0.5, epsilon = 1e-12);
+        assert_eq!(f.take_correction().unwrap(), ErrorVector::zeros());
+        f.update_depth(50.3, 50.0, 1.0).unwrap();
+        let dx = f.take_correction().unwrap();
+        assert_abs_diff_eq!(dx[POS + 2], 0.15, epsilon = 1e-12);
+        // Gated: a 100-sigma outlier is rejected.
+        let gate = GateThreshold::from_chi_square_probability(0.999, 3).unwrap();
+        let out = f
+            .update_velocity(
+                &Vector3::zeros(),
+                &Vector3::new(100.0, 0.0, 0.0),
+                &r,
+                Some(gate),
+            )
+            .unwrap();
+        assert!(!out.is_accepted());
+        let phi = ErrorCovariance::identity();
+        let q = ErrorCovariance::identity() * 1e-6;
+        f.predict(&phi, &q, 0.1).unwrap();
+        assert!(f.predict(&phi, &q, 0.05).is_err());
+        assert!(ErrorStateFilter::new(&ErrorCovariance::zeros(), 0.0).is_err());
+    }
+}
