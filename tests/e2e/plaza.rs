@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 
 use fathom::sim::data::matv5::{NamedMatrix, write_mat_v5};
-use fathom::sim::data::plaza::{PlazaFiles, PlazaLog, RangeOrder, read_mat};
+use fathom::sim::data::plaza::{PlazaFiles, PlazaLog, read_mat};
 use fathom::sim::experiments::plaza::find_data_dir;
 use fathom::sim::replay::plaza::{PlazaReplay, parse_settings, replay};
 

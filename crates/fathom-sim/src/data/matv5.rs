@@ -42,7 +42,7 @@ fn push_tag(out: &mut Vec<u8>, data_type: u32, n_bytes: usize) {
 }
 
 fn pad8(out: &mut Vec<u8>) {
-    while out.len() % 8 != 0 {
+    while !out.len().is_multiple_of(8) {
         out.push(0);
     }
 }

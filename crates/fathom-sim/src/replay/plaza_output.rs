@@ -527,10 +527,17 @@ pub fn report_section(r: &PlazaReplay) -> String {
          Huber down-weighting, the update uses the variance `R |e| / {k}`, so a wrong range \
          moves the state by a bounded amount instead of being either swallowed or thrown \
          away; `|e| > {rj}`: rejected (gross errors only). A filter that is wrong and too \
-         confident would reject everything from then on (lock-out); here every run of \
-         {n} consecutive rejections multiplies the state covariance by {inf}, so the gate \
-         widens until the ranges are accepted again. The hard-gate ablation uses paper B's \
-         gate alone (reject beyond {hg} sigma, nothing else).\n\n",
+         confident would reject everything from then on (lock-out), or let ranges through \
+         only with tiny weights while each of them still shrinks `P` (a crawl back). Here \
+         every run of {n} consecutive ranges that are rejected or down-weighted, overall or \
+         from one beacon (a lock-out can be partial: beacons that do not see the error keep \
+         agreeing), multiplies the state covariance by {inf}, so the gate widens until the \
+         ranges are accepted again. For a consistent filter such a run has probability \
+         about P(|N(0,1)| > {k})^{n}, so it practically never fires when nothing is wrong. \
+         The unit test `robust::tests::hard_gating_locks_out_and_recovery_does_not` starts \
+         a filter 8 m off with a tiny covariance: the hard gate alone rejects every range \
+         and stays 8 m off, the robust filter recovers to centimetres. The hard-gate \
+         ablation uses paper B's gate alone (reject beyond {hg} sigma, nothing else).\n\n",
         k = f(s.huber_k, 1),
         rj = f(s.reject_sigma, 1),
         n = s.recovery_after,
@@ -571,6 +578,7 @@ pub fn report_section(r: &PlazaReplay) -> String {
                 m.accepted.to_string(),
                 m.downweighted.to_string(),
                 m.rejected.to_string(),
+                m.dropped.to_string(),
                 m.recoveries.to_string(),
             ]
         })
@@ -588,6 +596,7 @@ pub fn report_section(r: &PlazaReplay) -> String {
             "accepted",
             "down-weighted",
             "rejected",
+            "superseded",
             "recoveries",
         ],
         &rows,
@@ -600,7 +609,9 @@ pub fn report_section(r: &PlazaReplay) -> String {
          update equals SI's sequential one. On this log ranges arrive one at a time (about \
          {} per second, a beacon every ~{} s), so an epoch of {} s rarely holds more than \
          one range and the three schemes differ mainly in when a range is applied (its own \
-         stamp for AS, the next epoch for SC/SI).\n",
+         stamp for AS, the next epoch for SC/SI). \"superseded\" counts SC/SI ranges replaced by a \
+         newer range of the same beacon in the same epoch window (paper B's rule: the newest \
+         sample per sensor and epoch).\n",
         s.correlation_sigma,
         f(
             p.ranges.len() as f64 / p.eval.last().map_or(1.0, |e| e.0),
