@@ -9,4 +9,5 @@ mod support;
 mod beacons;
 mod fusion;
 mod noise;
+mod plaza;
 mod vkf;

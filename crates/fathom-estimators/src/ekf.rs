@@ -160,6 +160,26 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
         self.kf.covariance()
     }
 
+    /// Multiplies the covariance by `factor` (> 0), keeping the state: covariance
+    /// inflation, e.g. to recover from a lock-out ([`crate::robust`]).
+    ///
+    /// # Errors
+    /// [`EstimatorError::OutOfRange`] for a non-positive or non-finite factor, or a
+    /// covariance error; the filter is unchanged on error.
+    pub fn inflate_covariance(&mut self, factor: f64) -> Result<(), EstimatorError> {
+        if !(factor.is_finite() && factor > 0.0) {
+            return Err(EstimatorError::OutOfRange {
+                what: "covariance inflation factor".into(),
+                value: factor,
+                expected: "> 0",
+            });
+        }
+        let t = self.kf.time();
+        let estimate = Gaussian::new(*self.kf.state(), self.kf.covariance() * factor)
+            .map_err(|e| EstimatorError::from_core_at(e, t))?;
+        self.kf.set_estimate(estimate)
+    }
+
     /// Merges a received input sample (it drives the predictions from now on).
     pub fn apply_input(&mut self, sample: &M::InputSample) {
         self.model.apply_sample(&mut self.input, sample);

@@ -59,9 +59,11 @@ pub mod gating;
 pub mod integrated_nav;
 pub mod kalman;
 pub mod models;
+pub mod robust;
 pub mod schemes;
 pub mod stacked;
 pub mod velocity_filter;
+pub mod wheel_odometry;
 
 #[cfg(test)]
 mod consistency_tests;

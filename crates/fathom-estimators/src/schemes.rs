@@ -41,10 +41,20 @@
 //!
 //! Every measurement ends in exactly one [`Decision`] (accepted, rejected, stale,
 //! superseded), so rejected measurements are reported, not lost.
+//!
+//! # Robust handling (optional)
+//! With [`SchemeFilter::with_robust`] every group (AS same-stamp group, SC/SI epoch) is
+//! gated on the normalized innovation at the prior (`S = H P H^T + R_cc`, the channel
+//! gate), the accepted measurements are Huber down-weighted by inflating their
+//! variances (SC: `R' = D R D`, `D = diag(sqrt(factor))`; SI/AS: the sequential update
+//! with the inflated diagonal variances), and runs of consecutive rejected or
+//! down-weighted measurements (overall or per channel) inflate the state covariance so the filter cannot lock
+//! itself out ([`crate::robust`]).
 
 use crate::{
     EstimatorError, GateThreshold, ScalarOutcome,
     ekf::{Ekf, GroupItem, MotionModel, ScalarModel},
+    robust::{LockoutMonitor, RobustPolicy},
 };
 use fathom_core::{CoreError, Time, gaussian::SYMMETRY_TOLERANCE};
 use nalgebra::DMatrix;
@@ -279,6 +289,10 @@ pub struct SchemeFilter<const N: usize, M: MotionModel<N>, S> {
     decisions: Vec<Decision>,
     counts: Vec<ChannelCounts>,
     late_inputs: usize,
+    /// Optional robust handling, its lock-out monitor and the down-weighted count.
+    robust: Option<RobustPolicy>,
+    lockout: LockoutMonitor,
+    downweighted: usize,
 }
 
 impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<N, M, S> {
@@ -298,7 +312,27 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
             decisions: Vec::new(),
             counts: vec![ChannelCounts::default(); c],
             late_inputs: 0,
+            robust: None,
+            lockout: LockoutMonitor::default(),
+            downweighted: 0,
         }
+    }
+
+    /// Turns on robust handling (module docs): Huber down-weighting and lock-out
+    /// recovery by covariance inflation, gates as configured per channel.
+    pub fn with_robust(mut self, policy: RobustPolicy) -> Self {
+        self.robust = Some(policy);
+        self
+    }
+
+    /// Measurements applied with an inflated variance (robust handling).
+    pub fn downweighted(&self) -> usize {
+        self.downweighted
+    }
+
+    /// Covariance inflations after runs of rejections (robust handling).
+    pub fn recoveries(&self) -> usize {
+        self.lockout.recoveries()
     }
 
     /// The EKF (state, covariance, time).
@@ -487,6 +521,9 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
         &mut self,
         obs: &[Observation<S>],
     ) -> Result<Vec<ScalarOutcome>, EstimatorError> {
+        if let Some(policy) = self.robust {
+            return self.update_robust(obs, false, policy);
+        }
         let p = &self.config.0;
         let items: Vec<GroupItem<'_, S>> = obs
             .iter()
@@ -498,6 +535,76 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
             })
             .collect();
         self.ekf.update_sequential(&items)
+    }
+
+    /// Robust group update (module docs): gate at the prior, Huber variance
+    /// inflation, stacked (`stacked`) or sequential update of the accepted items, then
+    /// lock-out monitoring in item order.
+    fn update_robust(
+        &mut self,
+        obs: &[Observation<S>],
+        stacked: bool,
+        policy: RobustPolicy,
+    ) -> Result<Vec<ScalarOutcome>, EstimatorError> {
+        let x = *self.ekf.state();
+        let p = *self.ekf.covariance();
+        let t = self.ekf.time();
+        let cfg = &self.config.0;
+        let mut outcomes = Vec::with_capacity(obs.len());
+        let mut factors = Vec::with_capacity(obs.len());
+        for o in obs {
+            let (h0, h_row) = o.model.evaluate(&x)?;
+            let nu = o.model.residual(o.value, h0);
+            let s = (h_row * p * h_row.transpose())[0] + cfg.channel_cov[(o.channel, o.channel)];
+            if !(nu.is_finite() && s.is_finite() && s > 0.0) {
+                return Err(EstimatorError::NotPositiveDefinite {
+                    what: format!(
+                        "innovation covariance S (channel {}, tag {})",
+                        o.channel, o.tag
+                    ),
+                    time: t,
+                });
+            }
+            let nis = nu * nu / s;
+            let accepted = cfg.gates[o.channel].is_none_or(|g| g.accepts(nis));
+            outcomes.push(ScalarOutcome {
+                innovation: nu,
+                innovation_var: s,
+                nis,
+                accepted,
+            });
+            factors.push(policy.variance_factor(nis.sqrt()));
+        }
+        let keep: Vec<usize> = (0..obs.len()).filter(|&i| outcomes[i].accepted).collect();
+        if !keep.is_empty() {
+            let items: Vec<GroupItem<'_, S>> = keep
+                .iter()
+                .map(|&i| GroupItem {
+                    value: obs[i].value,
+                    model: &obs[i].model,
+                    variance: cfg.channel_cov[(obs[i].channel, obs[i].channel)] * factors[i],
+                    gate: None,
+                })
+                .collect();
+            if stacked {
+                let r = DMatrix::from_fn(keep.len(), keep.len(), |a, b| {
+                    let (i, j) = (keep[a], keep[b]);
+                    cfg.channel_cov[(obs[i].channel, obs[j].channel)]
+                        * (factors[i] * factors[j]).sqrt()
+                });
+                self.ekf.update_stacked(&items, &r)?;
+            } else {
+                self.ekf.update_sequential(&items)?;
+            }
+            self.downweighted += keep.iter().filter(|&&i| factors[i] > 1.0).count();
+        }
+        for ((o, factor), ob) in outcomes.iter().zip(&factors).zip(obs) {
+            let consistent = o.accepted && *factor <= 1.0;
+            if let Some(factor) = self.lockout.record(ob.channel, consistent, &policy) {
+                self.ekf.inflate_covariance(factor)?;
+            }
+        }
+        Ok(outcomes)
     }
 
     // ----- SC / SI --------------------------------------------------------------
@@ -541,8 +648,11 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
         let at = self.ekf.time();
         let group: Vec<Observation<S>> = self.pending.iter_mut().filter_map(Option::take).collect();
         if !group.is_empty() {
-            let outcomes = match self.scheme() {
-                UpdateScheme::SynchronousCollective => {
+            let outcomes = match (self.scheme(), self.robust) {
+                (UpdateScheme::SynchronousCollective, Some(policy)) => {
+                    self.update_robust(&group, true, policy)?
+                }
+                (UpdateScheme::SynchronousCollective, None) => {
                     let cov = &self.config.0.channel_cov;
                     let r = DMatrix::from_fn(group.len(), group.len(), |a, b| {
                         cov[(group[a].channel, group[b].channel)]

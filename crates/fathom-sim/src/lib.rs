@@ -43,12 +43,14 @@
 //!   [`run_paper`];
 //! - [`experiments`]: the registered paper experiments.
 
+pub mod data;
 pub mod error;
 pub mod experiment;
 pub mod experiments;
 pub mod montecarlo;
 pub mod output;
 pub mod plot;
+pub mod replay;
 pub mod scenario;
 
 pub use error::SimError;

@@ -9,6 +9,7 @@ pub mod beacons;
 pub mod common;
 pub mod fusion;
 pub mod noise;
+pub mod plaza;
 pub mod vkf;
 
 use crate::experiment::Experiment;
@@ -20,5 +21,6 @@ pub fn registry() -> Vec<Experiment> {
         noise::EXPERIMENT,
         beacons::EXPERIMENT,
         vkf::EXPERIMENT,
+        plaza::EXPERIMENT,
     ]
 }

@@ -1,0 +1,13 @@
+//! Readers (and a minimal writer) for real data sets in their native file formats.
+//!
+//! - [`plaza`]: the CMU Plaza range-only data sets (`*_DR.txt` odometry, `*_TD.txt`
+//!   ranges, `*_.mat` ground truth, beacon survey and dead-reckoned path);
+//! - [`matv5`]: writing numeric matrices as an uncompressed MATLAB v5 file (tests and
+//!   tools that need to make a modified copy of a `.mat` file; reading goes through the
+//!   `matfile` crate).
+//!
+//! Every error names the file and, for text files, the 1-based line (for `.mat`
+//! matrices, the matrix and its 1-based row).
+
+pub mod matv5;
+pub mod plaza;
