@@ -112,3 +112,37 @@ impl BeaconsToml {
 pub fn f(x: f64, decimals: usize) -> String {
     format!("{x:.decimals$}")
 }
+
+/// Checks the name of the case at `cases[index]`: a non-empty name of
+/// `[A-Za-z0-9_-]` (it becomes part of method names and file names) that no earlier
+/// case uses.
+///
+/// # Errors
+/// [`SimError::Invalid`] naming `cases[index].name`.
+pub fn check_case_name<'a>(
+    file: &str,
+    index: usize,
+    name: &str,
+    earlier: impl IntoIterator<Item = &'a str>,
+) -> Result<(), SimError> {
+    let key = format!("cases[{index}].name");
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
+        return Err(SimError::invalid(
+            file,
+            key,
+            format!("must be a non-empty name of [a-z0-9_-], got {name:?}"),
+        ));
+    }
+    if earlier.into_iter().any(|e| e == name) {
+        return Err(SimError::invalid(
+            file,
+            key,
+            format!("duplicate case name {name:?}"),
+        ));
+    }
+    Ok(())
+}

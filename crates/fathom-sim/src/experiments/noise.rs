@@ -25,7 +25,7 @@ use nalgebra::DMatrix;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 
-use super::common::{BeaconsToml, MotionToml, f, generate_motion};
+use super::common::{BeaconsToml, MotionToml, check_case_name, f, generate_motion};
 use crate::SimError;
 use crate::experiment::{Experiment, ExperimentContext, ExperimentOutput};
 use crate::montecarlo::run_rng;
@@ -185,28 +185,12 @@ impl NoiseScenario {
         let mut cases = Vec::with_capacity(self.cases.len());
         for (k, case) in self.cases.iter().enumerate() {
             let key = format!("cases[{k}]");
-            if case.name.is_empty()
-                || !case
-                    .name
-                    .chars()
-                    .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
-            {
-                return Err(SimError::invalid(
-                    file,
-                    format!("{key}.name"),
-                    format!(
-                        "must be a non-empty name of [a-z0-9_-], got {:?}",
-                        case.name
-                    ),
-                ));
-            }
-            if self.cases[..k].iter().any(|c| c.name == case.name) {
-                return Err(SimError::invalid(
-                    file,
-                    format!("{key}.name"),
-                    format!("duplicate case name {:?}", case.name),
-                ));
-            }
+            check_case_name(
+                file,
+                k,
+                &case.name,
+                self.cases[..k].iter().map(|c| c.name.as_str()),
+            )?;
             require_non_negative(file, &format!("{key}.corr_sigma_m"), case.corr_sigma_m)?;
             if !case.gaussian && case.corr_sigma_m == 0.0 {
                 return Err(SimError::invalid(
