@@ -7,6 +7,7 @@
 mod support;
 
 mod beacons;
+mod cli;
 mod fusion;
 mod noise;
 mod plaza;

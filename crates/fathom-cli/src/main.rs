@@ -1,9 +1,19 @@
-//! `fathom`: the command-line tool. Its first subcommand replays range-beacon
-//! localization on a recorded data set:
+//! `fathom`: the command-line tool.
 //!
 //! ```text
+//! fathom run <scenario.toml> [--runs N] [--threads T] [--out DIR]
+//! fathom check <scenario.toml>
+//! fathom list
 //! fathom replay plaza <DIR> [--config FILE] [--out DIR]
 //! ```
+//!
+//! `run` runs any scenario file of a registered experiment (the file's top-level
+//! `experiment` key names it) and writes the experiment's outputs plus the scenario,
+//! its resolved form and `run_info.json` into `--out` (default
+//! `fathom-out/<experiment>`). `check` parses and validates a scenario without running
+//! it. `list` shows the experiments, estimators, update schemes and sensors.
+//!
+//! `replay plaza` replays range-beacon localization on a recorded data set:
 //!
 //! `DIR` holds one CMU Plaza data set in its native files (`*_DR.txt`, `*_TD.txt`,
 //! `*_.mat`). The command runs pure dead reckoning and the EKF under the AS, SC and SI
@@ -24,6 +34,8 @@ use clap::{Args, Parser, Subcommand};
 use fathom_sim::data::plaza::{PlazaError, PlazaLog};
 use fathom_sim::replay::plaza::{PlazaSettings, parse_settings, replay};
 use fathom_sim::replay::plaza_output::{write_outputs, write_standalone};
+use fathom_sim::user_run::{RunOptions, check_command, check_scenario, one_line, run_scenario};
+use fathom_sim::{SimError, error_chain, experiments::registry};
 
 /// The built-in settings (a copy of `scenarios/plaza.toml` at build time).
 const DEFAULT_PLAZA_CONFIG: &str = include_str!("../../../scenarios/plaza.toml");
@@ -44,6 +56,36 @@ enum Command {
     /// Replay estimators on a recorded data set and score them against ground truth.
     #[command(subcommand)]
     Replay(ReplayData),
+    /// Run a scenario file (copy one from `scenarios/`, change numbers, run it).
+    Run(RunArgs),
+    /// Parse and validate a scenario file without running it; print the resolved file.
+    Check(CheckArgs),
+    /// List the experiments, estimators, update schemes and sensors.
+    List,
+}
+
+#[derive(Debug, Args)]
+struct RunArgs {
+    /// Scenario file (TOML with a top-level `experiment = "<name>"`).
+    scenario: PathBuf,
+    /// Override the scenario's Monte Carlo run count.
+    #[arg(long, value_name = "N")]
+    runs: Option<usize>,
+    /// Worker threads (default: all cores; results do not depend on it).
+    #[arg(long, value_name = "T")]
+    threads: Option<usize>,
+    /// Output folder (default `fathom-out/<experiment>`).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+#[derive(Debug, Args)]
+struct CheckArgs {
+    /// Scenario file.
+    scenario: PathBuf,
+    /// Print only the OK line, not the resolved scenario.
+    #[arg(long)]
+    quiet: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -136,9 +178,169 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
     Ok(text)
 }
 
+fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
+    let registry = registry();
+    // Scenario problems are usage errors (exit 2), reported on one line.
+    let (code, line) = check_command(&args.scenario, &registry);
+    if code != 0 {
+        return Err(Failure::Usage(anyhow!(line)));
+    }
+    let options = RunOptions {
+        scenario: args.scenario.clone(),
+        out_dir: args.out.clone(),
+        runs: args.runs,
+        threads: args.threads,
+        base_dir: std::env::current_dir()
+            .context("cannot read the current directory")
+            .map_err(Failure::Run)?,
+    };
+    let (result, info) = run_scenario(&options, &registry).map_err(|e| {
+        let usage = matches!(e, SimError::InvalidArgument { .. });
+        let e = anyhow!(one_line(&error_chain(&e)));
+        if usage {
+            Failure::Usage(e)
+        } else {
+            Failure::Run(e)
+        }
+    })?;
+    let s = &result.summary;
+    let mut text = format!(
+        "{} ({}): {} runs, base seed {}, {:.1} s, fathom {}\n",
+        info.experiment,
+        s.seed_doc,
+        s.runs,
+        s.base_seed,
+        result.elapsed.as_secs_f64(),
+        info.fathom_version
+    );
+    const SHOWN_ROWS: usize = 20;
+    for row in s.rows.iter().take(SHOWN_ROWS) {
+        text.push_str(&format!(
+            "  {:<24} {:<28} {:>12.4}\n",
+            row.method, row.metric, row.value
+        ));
+    }
+    if s.rows.len() > SHOWN_ROWS {
+        text.push_str(&format!(
+            "  ... {} more rows in report.md\n",
+            s.rows.len() - SHOWN_ROWS
+        ));
+    }
+    for c in &s.claims {
+        text.push_str(&format!(
+            "[{}] {}: {}\n",
+            if c.holds { "holds" } else { "does not hold" },
+            c.id,
+            c.text
+        ));
+    }
+    text.push_str(&format!(
+        "outputs: {} ({} figures, report.md, summary.json)\n",
+        result.out_dir.display(),
+        result.figures.len()
+    ));
+    Ok(text)
+}
+
+fn check_cmd(args: &CheckArgs) -> Result<String, Failure> {
+    let registry = registry();
+    let (code, line) = check_command(&args.scenario, &registry);
+    if code != 0 {
+        return Err(Failure::Usage(anyhow!(line)));
+    }
+    if args.quiet {
+        return Ok(format!("{line}\n"));
+    }
+    let resolved = check_scenario(&args.scenario, &registry)
+        .map_err(|e| Failure::Usage(anyhow!(one_line(&error_chain(&e)))))?;
+    Ok(format!(
+        "# {line}\n# resolved scenario (defaults filled in):\n{}",
+        resolved.resolved_toml
+    ))
+}
+
+fn list_cmd() -> String {
+    let mut text = String::from("experiments (fathom run <scenario>; presets in scenarios/):\n");
+    for e in registry() {
+        text.push_str(&format!(
+            "  {:<8} seed {:<40} scenario {}\n",
+            e.name, e.seed_doc, e.default_scenario
+        ));
+    }
+    text.push_str("estimators:\n");
+    for (name, doc) in ESTIMATORS {
+        text.push_str(&format!("  {name:<16} {doc}\n"));
+    }
+    text.push_str("update schemes (beacons, plaza):\n");
+    for (name, doc) in SCHEMES {
+        text.push_str(&format!("  {name:<16} {doc}\n"));
+    }
+    text.push_str("sensors:\n");
+    for (name, doc) in SENSORS {
+        text.push_str(&format!("  {name:<16} {doc}\n"));
+    }
+    text
+}
+
+/// Estimators available in the experiments (static list).
+const ESTIMATORS: &[(&str, &str)] = &[
+    (
+        "kf",
+        "linear Kalman filter, Joseph-form update (fathom-estimators)",
+    ),
+    (
+        "ekf",
+        "extended Kalman filter for range-beacon localization (beacons, plaza)",
+    ),
+    (
+        "ins-error-kf",
+        "15-state INS error-state filter (fusion, vkf: INS-DVL, ESKF)",
+    ),
+    ("vkf", "velocity filter switching DVL / RPM aiding (vkf)"),
+    (
+        "information-fusion",
+        "track fusion in information form, eq. 10 (fusion)",
+    ),
+    (
+        "dead-reckoning",
+        "DVL / odometry dead reckoning without corrections",
+    ),
+];
+
+/// Measurement update schemes (static list).
+const SCHEMES: &[(&str, &str)] = &[
+    (
+        "AS",
+        "asynchronous: each measurement updates at its own time stamp",
+    ),
+    ("SC", "synchronous collective: one stacked update per epoch"),
+    (
+        "SI",
+        "synchronous individual: sequential scalar updates per epoch",
+    ),
+];
+
+/// Simulated sensor models (static list).
+const SENSORS: &[(&str, &str)] = &[
+    ("dvl", "Doppler velocity log (body velocity, bottom lock)"),
+    ("ahrs", "attitude / rate sensor"),
+    (
+        "imu",
+        "strapdown IMU from truth (accelerometers, gyros, biases)",
+    ),
+    ("range", "acoustic / radio range to a beacon"),
+    ("depth", "pressure depth gauge"),
+    ("echo-sounder", "altitude above the sea floor"),
+    ("rpm", "propeller RPM speed log"),
+    ("wheel-odometry", "recorded odometry (plaza replay)"),
+];
+
 fn run(cli: &Cli) -> Result<String, Failure> {
     match &cli.command {
         Command::Replay(ReplayData::Plaza(args)) => replay_plaza(args),
+        Command::Run(args) => run_scenario_cmd(args),
+        Command::Check(args) => check_cmd(args),
+        Command::List => Ok(list_cmd()),
     }
 }
 
@@ -184,14 +386,60 @@ mod tests {
             "fathom", "replay", "plaza", "data/p1", "--config", "c.toml", "--out", "o",
         ])
         .unwrap();
-        let Command::Replay(ReplayData::Plaza(a)) = cli.command;
+        let Command::Replay(ReplayData::Plaza(a)) = cli.command else {
+            panic!("not replay")
+        };
         assert_eq!(a.dir, PathBuf::from("data/p1"));
         assert_eq!(a.config, Some(PathBuf::from("c.toml")));
         assert_eq!(a.out, PathBuf::from("o"));
         let cli = Cli::try_parse_from(["fathom", "replay", "plaza", "d"]).unwrap();
-        let Command::Replay(ReplayData::Plaza(a)) = cli.command;
+        let Command::Replay(ReplayData::Plaza(a)) = cli.command else {
+            panic!("not replay")
+        };
         assert_eq!(a.out, PathBuf::from("plaza-replay"));
         assert!(a.config.is_none());
+    }
+
+    #[test]
+    fn parses_run_check_list() {
+        let cli = Cli::try_parse_from([
+            "fathom",
+            "run",
+            "s.toml",
+            "--runs",
+            "5",
+            "--threads",
+            "2",
+            "--out",
+            "o",
+        ])
+        .unwrap();
+        let Command::Run(a) = cli.command else {
+            panic!("not run")
+        };
+        assert_eq!(
+            (a.scenario, a.runs, a.threads, a.out),
+            (
+                PathBuf::from("s.toml"),
+                Some(5),
+                Some(2),
+                Some(PathBuf::from("o"))
+            )
+        );
+        assert!(matches!(
+            Cli::try_parse_from(["fathom", "check", "s.toml"])
+                .unwrap()
+                .command,
+            Command::Check(_)
+        ));
+        assert!(matches!(
+            Cli::try_parse_from(["fathom", "list"]).unwrap().command,
+            Command::List
+        ));
+        let l = list_cmd();
+        for name in ["fusion", "noise", "beacons", "vkf", "plaza", "SC", "dvl"] {
+            assert!(l.contains(name), "{l}");
+        }
     }
 
     #[test]

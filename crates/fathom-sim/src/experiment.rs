@@ -330,8 +330,22 @@ fn run_one(options: &PaperOptions, exp: &Experiment) -> Result<ExperimentResult,
         runs: options.runs,
         threads: options.threads,
     };
+    run_in_context(exp, &ctx)
+}
+
+/// Run one experiment with a prepared context (its `out_dir` must exist) and write
+/// `summary.json` and `report.md` into `ctx.out_dir`; what [`run_paper`] does per
+/// experiment, also used by [`crate::user_run::run_scenario`] (`fathom run`).
+///
+/// # Errors
+/// The experiment's error, a summary naming another experiment, or I/O failures.
+pub fn run_in_context(
+    exp: &Experiment,
+    ctx: &ExperimentContext,
+) -> Result<ExperimentResult, SimError> {
+    let out_dir = ctx.out_dir.clone();
     let start = Instant::now();
-    let output = (exp.run)(&ctx)?;
+    let output = (exp.run)(ctx)?;
     let elapsed = start.elapsed();
     let summary = output.summary;
     if summary.experiment != exp.name || summary.seed_doc != exp.seed_doc {
@@ -345,7 +359,7 @@ fn run_one(options: &PaperOptions, exp: &Experiment) -> Result<ExperimentResult,
     }
     write_summary_json(out_dir.join("summary.json"), &summary)?;
     let figures = figures_in(&out_dir)?;
-    let report = experiment_report(&ctx, &summary, &output.report_section, &figures);
+    let report = experiment_report(ctx, &summary, &output.report_section, &figures);
     write_text(out_dir.join("report.md"), &report)?;
     Ok(ExperimentResult {
         name: exp.name.to_string(),

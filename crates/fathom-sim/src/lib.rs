@@ -52,6 +52,7 @@ pub mod output;
 pub mod plot;
 pub mod replay;
 pub mod scenario;
+pub mod user_run;
 
 pub use error::SimError;
 pub use experiment::{

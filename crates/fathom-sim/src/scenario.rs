@@ -197,6 +197,31 @@ pub fn require_in_range(
     }
 }
 
+/// Check the top-level `experiment` key of a scenario file names `expected`.
+///
+/// # Errors
+/// [`SimError::Invalid`] naming the key `experiment`.
+pub fn require_experiment(file: &str, value: &str, expected: &str) -> Result<(), SimError> {
+    if value == expected {
+        Ok(())
+    } else {
+        Err(SimError::invalid(
+            file,
+            "experiment",
+            format!("this is a `{expected}` scenario, so it must be \"{expected}\", got {value:?}"),
+        ))
+    }
+}
+
+/// Serialize a (resolved) scenario back to TOML.
+///
+/// # Errors
+/// [`SimError::InvalidArgument`] if the value cannot be written as TOML.
+pub fn to_toml<T: serde::Serialize>(value: &T, file: &str) -> Result<String, SimError> {
+    toml::to_string(value)
+        .map_err(|e| SimError::invalid_argument(format!("scenario `{file}`"), e.to_string()))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -82,6 +82,9 @@ const MAIN_CASE: &str = "high";
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct BeaconsScenario {
+    /// The experiment this scenario is for: must be `"beacons"` (lets `fathom run`
+    /// pick the experiment from the file).
+    pub experiment: String,
     /// Monte Carlo runs.
     pub runs: usize,
     /// Base seed; run `i` uses ChaCha stream `i`.
@@ -550,6 +553,7 @@ struct Checked {
 
 impl BeaconsScenario {
     fn check(&self, file: &str, runs_override: Option<usize>) -> Result<Checked, SimError> {
+        crate::scenario::require_experiment(file, &self.experiment, "beacons")?;
         let runs = runs_override.unwrap_or(self.runs);
         if runs < 2 {
             return Err(SimError::invalid(
@@ -1544,6 +1548,17 @@ fn report_section(
          ranking of the schemes is what can be compared.\n",
     );
     s
+}
+
+/// Parses and checks a `beacons` scenario text without running it (`fathom check`);
+/// returns the resolved scenario re-serialized as TOML.
+///
+/// # Errors
+/// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
+pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
+    let scenario: BeaconsScenario = crate::scenario::parse_toml(text, file)?;
+    scenario.check(file, None)?;
+    crate::scenario::to_toml(&scenario, file)
 }
 
 #[cfg(test)]

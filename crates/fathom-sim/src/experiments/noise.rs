@@ -52,6 +52,9 @@ const LABELS: [&str; 5] = ["range1", "range2", "range3", "range4", "depth"];
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NoiseScenario {
+    /// The experiment this scenario is for: must be `"noise"` (lets `fathom run`
+    /// pick the experiment from the file).
+    pub experiment: String,
     /// Monte Carlo runs of the paper-length generation.
     pub runs: usize,
     /// Base seed; run `i` uses ChaCha stream `i`.
@@ -136,6 +139,7 @@ struct Case {
 
 impl NoiseScenario {
     fn check(&self, file: &str, runs_override: Option<usize>) -> Result<Checked, SimError> {
+        crate::scenario::require_experiment(file, &self.experiment, "noise")?;
         let runs = runs_override.unwrap_or(self.runs);
         if runs < 2 {
             return Err(SimError::invalid(
@@ -802,6 +806,17 @@ fn interpretation(block_spread_notes: &[String]) -> String {
          extraction.\n",
     );
     s
+}
+
+/// Parses and checks a `noise` scenario text without running it (`fathom check`);
+/// returns the resolved scenario re-serialized as TOML.
+///
+/// # Errors
+/// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
+pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
+    let scenario: NoiseScenario = crate::scenario::parse_toml(text, file)?;
+    scenario.check(file, None)?;
+    crate::scenario::to_toml(&scenario, file)
 }
 
 #[cfg(test)]

@@ -51,6 +51,9 @@ use crate::scenario::{require_non_negative, require_positive};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct PlazaToml {
+    /// The experiment this scenario is for: must be `"plaza"` (lets `fathom run`
+    /// pick the experiment from the file).
+    pub experiment: String,
     /// Where the data is and how to read it.
     pub data: DataToml,
     /// Initial pose uncertainty.
@@ -245,6 +248,7 @@ impl PlazaToml {
     /// # Errors
     /// [`SimError::Invalid`] naming the key.
     pub fn check(&self, file: &str) -> Result<PlazaSettings, SimError> {
+        crate::scenario::require_experiment(file, &self.experiment, "plaza")?;
         let range_order = match self.data.range_order.as_str() {
             "sort" => RangeOrder::Sort,
             "strict" => RangeOrder::Strict,
@@ -1054,6 +1058,17 @@ pub fn replay(log: &PlazaLog, settings: &PlazaSettings) -> Result<PlazaReplay, S
         rows: (log.odometry.len(), log.ranges.len(), log.ground_truth.len()),
         data_name,
     })
+}
+
+/// Parses and checks a `plaza` scenario text without running it (`fathom check`);
+/// returns the resolved scenario re-serialized as TOML.
+///
+/// # Errors
+/// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
+pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
+    let scenario: PlazaToml = crate::scenario::parse_toml(text, file)?;
+    scenario.check(file)?;
+    crate::scenario::to_toml(&scenario, file)
 }
 
 #[cfg(test)]

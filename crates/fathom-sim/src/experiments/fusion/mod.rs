@@ -46,6 +46,9 @@ pub const EXPERIMENT: Experiment = Experiment {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FusionScenario {
+    /// The experiment this scenario is for: must be `"fusion"` (lets `fathom run`
+    /// pick the experiment from the file).
+    pub experiment: String,
     /// Monte Carlo runs (noise realizations of the one mission).
     pub runs: usize,
     /// Base seed; run `i` uses ChaCha stream `i`.
@@ -231,6 +234,7 @@ impl FusionScenario {
     /// # Errors
     /// [`SimError::Invalid`] naming the file and key.
     pub fn check(&self, file: &str, runs_override: Option<usize>) -> Result<FusionSetup, SimError> {
+        crate::scenario::require_experiment(file, &self.experiment, "fusion")?;
         let runs = runs_override.unwrap_or(self.runs);
         if runs < 2 {
             return Err(SimError::invalid(
@@ -757,6 +761,17 @@ fn claims(setup: &FusionSetup, results: &[RunResult]) -> Result<Vec<Claim>, SimE
         ),
     ));
     Ok(out)
+}
+
+/// Parses and checks a `fusion` scenario text without running it (`fathom check`);
+/// returns the resolved scenario re-serialized as TOML.
+///
+/// # Errors
+/// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
+pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
+    let scenario: FusionScenario = crate::scenario::parse_toml(text, file)?;
+    scenario.check(file, None)?;
+    crate::scenario::to_toml(&scenario, file)
 }
 
 #[cfg(test)]

@@ -9,6 +9,8 @@
 //! with the literal "+-0.5 m/s" DVL bias reuses the same run streams.
 
 mod scenario;
+
+pub use scenario::check_scenario_text;
 mod sim;
 
 use fathom_stats::mean_ci;

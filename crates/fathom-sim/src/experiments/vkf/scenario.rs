@@ -23,6 +23,9 @@ use crate::scenario::{require_in_range, require_non_negative, require_positive};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct VkfScenario {
+    /// The experiment this scenario is for: must be `"vkf"` (lets `fathom run`
+    /// pick the experiment from the file).
+    pub experiment: String,
     /// Monte Carlo runs.
     pub runs: usize,
     /// Base seed; run `i` uses ChaCha stream `i`.
@@ -301,6 +304,7 @@ impl VkfScenario {
     /// # Errors
     /// [`SimError::Invalid`] naming the key.
     pub fn check(&self, file: &str, runs_override: Option<usize>) -> Result<Checked, SimError> {
+        crate::scenario::require_experiment(file, &self.experiment, "vkf")?;
         let runs = runs_override.unwrap_or(self.runs);
         if runs < 2 {
             return Err(SimError::invalid(
@@ -528,6 +532,17 @@ impl VkfScenario {
             eskf_sigma0_att,
         })
     }
+}
+
+/// Parses and checks a `vkf` scenario text without running it (`fathom check`);
+/// returns the resolved scenario re-serialized as TOML.
+///
+/// # Errors
+/// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
+pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
+    let scenario: VkfScenario = crate::scenario::parse_toml(text, file)?;
+    scenario.check(file, None)?;
+    crate::scenario::to_toml(&scenario, file)
 }
 
 #[cfg(test)]

@@ -1,0 +1,349 @@
+//! Running and checking a user's scenario file: the library side of `fathom run` and
+//! `fathom check`.
+//!
+//! A scenario file names its experiment with a top-level key `experiment = "<name>"`.
+//! The key is a field of every experiment's scenario struct (validated against the
+//! experiment's name) rather than being stripped by the driver: the experiment then
+//! parses the user's text unchanged, so line and column numbers in error messages stay
+//! those of the user's file. The driver only peeks at the key first
+//! ([`peek_experiment`]) to choose the experiment.
+
+use std::path::{Path, PathBuf};
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::SimError;
+use crate::experiment::{Experiment, ExperimentContext, ExperimentResult, run_in_context};
+use crate::experiments;
+
+/// Marker file written by [`run_scenario`] into its output directory.
+pub const RUN_INFO_FILE: &str = "run_info.json";
+
+/// The top-level `experiment` key, read leniently (other keys are ignored here).
+#[derive(Debug, Deserialize)]
+struct Peek {
+    experiment: Option<toml::Value>,
+}
+
+/// The experiment named by the scenario `text` (`file` labels errors).
+///
+/// # Errors
+/// [`SimError::Toml`] for a TOML syntax error; [`SimError::Invalid`] (key
+/// `experiment`) when the key is missing, not a string, or names no registered
+/// experiment.
+pub fn peek_experiment<'r>(
+    text: &str,
+    file: &str,
+    registry: &'r [Experiment],
+) -> Result<&'r Experiment, SimError> {
+    let peek: Peek = crate::scenario::parse_toml(text, file)?;
+    let known = registry
+        .iter()
+        .map(|e| format!("\"{}\"", e.name))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let name = match peek.experiment {
+        None => {
+            return Err(SimError::invalid(
+                file,
+                "experiment",
+                format!("missing; the scenario must name its experiment, one of {known}"),
+            ));
+        }
+        Some(toml::Value::String(s)) => s,
+        Some(other) => {
+            return Err(SimError::invalid(
+                file,
+                "experiment",
+                format!("must be a string, one of {known}, got {other}"),
+            ));
+        }
+    };
+    registry.iter().find(|e| e.name == name).ok_or_else(|| {
+        SimError::invalid(
+            file,
+            "experiment",
+            format!("unknown experiment {name:?}, expected one of {known}"),
+        )
+    })
+}
+
+/// The result of [`check_scenario`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct CheckedScenario {
+    /// The experiment the scenario is for.
+    pub experiment: String,
+    /// The resolved scenario (defaults filled in) as TOML.
+    pub resolved_toml: String,
+    /// Number of leaf keys (values, counting array elements of tables) in the resolved
+    /// scenario.
+    pub keys: usize,
+    /// Number of tables (including tables inside arrays of tables).
+    pub tables: usize,
+}
+
+/// A scenario check entry point: (text, file label) -> resolved TOML.
+pub type CheckFn = fn(&str, &str) -> Result<String, SimError>;
+
+/// The `check` entry point of the registered experiment `name`.
+pub fn checker(name: &str) -> Option<CheckFn> {
+    match name {
+        "fusion" => Some(experiments::fusion::check_scenario_text),
+        "noise" => Some(experiments::noise::check_scenario_text),
+        "beacons" => Some(experiments::beacons::check_scenario_text),
+        "vkf" => Some(experiments::vkf::check_scenario_text),
+        "plaza" => Some(crate::replay::plaza::check_scenario_text),
+        _ => None,
+    }
+}
+
+/// Parse and validate a scenario text without running it (`fathom check`).
+///
+/// # Errors
+/// As [`peek_experiment`], then the experiment's own parse and check errors
+/// ([`SimError::Toml`] with key path and line, [`SimError::Invalid`] with key path).
+pub fn check_scenario_text(
+    text: &str,
+    file: &str,
+    registry: &[Experiment],
+) -> Result<CheckedScenario, SimError> {
+    let exp = peek_experiment(text, file, registry)?;
+    let check = checker(exp.name).ok_or_else(|| {
+        SimError::invalid(
+            file,
+            "experiment",
+            format!("experiment \"{}\" has no scenario check", exp.name),
+        )
+    })?;
+    let resolved_toml = check(text, file)?;
+    let value: toml::Table = toml::from_str(&resolved_toml)
+        .map_err(|e| SimError::invalid_argument(format!("resolved `{file}`"), e.to_string()))?;
+    let (keys, tables) = count_keys(&toml::Value::Table(value));
+    Ok(CheckedScenario {
+        experiment: exp.name.to_string(),
+        resolved_toml,
+        keys,
+        tables,
+    })
+}
+
+/// [`check_scenario_text`] on a file (its path as given labels errors).
+///
+/// # Errors
+/// [`SimError::Io`] if the file cannot be read, else as [`check_scenario_text`].
+pub fn check_scenario(path: &Path, registry: &[Experiment]) -> Result<CheckedScenario, SimError> {
+    let text = std::fs::read_to_string(path).map_err(|e| SimError::io("read", path, e))?;
+    check_scenario_text(&text, &path.display().to_string(), registry)
+}
+
+/// Exit code of `fathom check` / `fathom run` for an invalid scenario or bad arguments.
+pub const EXIT_USAGE: u8 = 2;
+
+/// `fathom check <file>`: the line to print and the exit code (0 = valid,
+/// [`EXIT_USAGE`] = invalid). The error line names the file, the key path and, for
+/// TOML errors, the line; it is always one line.
+pub fn check_command(path: &Path, registry: &[Experiment]) -> (u8, String) {
+    match check_scenario(path, registry) {
+        Ok(c) => (
+            0,
+            format!(
+                "OK {}: experiment `{}`, {} keys in {} tables",
+                path.display(),
+                c.experiment,
+                c.keys,
+                c.tables
+            ),
+        ),
+        Err(e) => (EXIT_USAGE, one_line(&crate::experiment::error_chain(&e))),
+    }
+}
+
+/// `text` on one line (line breaks replaced by spaces).
+pub fn one_line(text: &str) -> String {
+    text.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+fn count_keys(v: &toml::Value) -> (usize, usize) {
+    match v {
+        toml::Value::Table(t) => t.values().fold((0, 1), |(k, n), v| {
+            let (k2, n2) = count_keys(v);
+            (k + k2, n + n2)
+        }),
+        toml::Value::Array(a) if a.iter().all(toml::Value::is_table) && !a.is_empty() => {
+            a.iter().fold((0, 0), |(k, n), v| {
+                let (k2, n2) = count_keys(v);
+                (k + k2, n + n2)
+            })
+        }
+        _ => (1, 0),
+    }
+}
+
+/// What [`run_scenario`] writes into `run_info.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RunInfo {
+    /// `fathom` version (the workspace version of `fathom-sim`).
+    pub fathom_version: String,
+    /// The experiment run.
+    pub experiment: String,
+    /// The scenario file as given.
+    pub scenario: String,
+    /// `--runs` override, if any.
+    pub runs: Option<usize>,
+    /// `--threads`, if given.
+    pub threads: Option<usize>,
+}
+
+/// Options of [`run_scenario`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RunOptions {
+    /// The scenario file.
+    pub scenario: PathBuf,
+    /// Output directory; `None` = `fathom-out/<experiment>`.
+    pub out_dir: Option<PathBuf>,
+    /// Override of the scenario's Monte Carlo run count (>= 1).
+    pub runs: Option<usize>,
+    /// Worker threads (>= 1; `None` = all cores).
+    pub threads: Option<usize>,
+    /// Where relative data folders of a scenario are looked up (the experiment's
+    /// `workspace_root`; `fathom run` passes the current directory).
+    pub base_dir: PathBuf,
+}
+
+/// Check, then run a user's scenario file with its experiment; writes the experiment's
+/// outputs (figures, CSV, `summary.json`, `report.md`) plus `scenario.toml` (the file
+/// as given), `scenario.resolved.toml` (defaults filled in) and `run_info.json` into
+/// the output directory.
+///
+/// A non-empty output directory is only reused when it holds a `run_info.json` of an
+/// earlier `fathom run` (its stale outputs are then removed), so `--out .` cannot
+/// delete unrelated files.
+///
+/// # Errors
+/// Check errors as [`check_scenario`], bad `--runs` / `--threads`, a refused output
+/// directory, the experiment's failure, or I/O errors.
+pub fn run_scenario(
+    options: &RunOptions,
+    registry: &[Experiment],
+) -> Result<(ExperimentResult, RunInfo), SimError> {
+    if options.runs == Some(0) {
+        return Err(SimError::invalid_argument("--runs", "must be at least 1"));
+    }
+    if options.threads == Some(0) {
+        return Err(SimError::invalid_argument(
+            "--threads",
+            "must be at least 1",
+        ));
+    }
+    let path = &options.scenario;
+    let label = path.display().to_string();
+    let text = std::fs::read_to_string(path).map_err(|e| SimError::io("read", path, e))?;
+    let checked = check_scenario_text(&text, &label, registry)?;
+    let exp = registry
+        .iter()
+        .find(|e| e.name == checked.experiment)
+        .ok_or_else(|| SimError::invalid(&label, "experiment", "not registered"))?;
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("fathom-out").join(exp.name));
+    prepare_out_dir(&out_dir)?;
+    let ctx = ExperimentContext {
+        name: exp.name.to_string(),
+        workspace_root: options.base_dir.clone(),
+        scenario_path: path.clone(),
+        scenario_label: label.clone(),
+        out_dir: out_dir.clone(),
+        runs: options.runs,
+        threads: options.threads,
+    };
+    let result = run_in_context(exp, &ctx)?;
+    crate::output::write_text(out_dir.join("scenario.toml"), &text)?;
+    crate::output::write_text(
+        out_dir.join("scenario.resolved.toml"),
+        &checked.resolved_toml,
+    )?;
+    let info = RunInfo {
+        fathom_version: env!("CARGO_PKG_VERSION").to_string(),
+        experiment: exp.name.to_string(),
+        scenario: label,
+        runs: options.runs,
+        threads: options.threads,
+    };
+    let json = serde_json::to_string_pretty(&info)
+        .map_err(|e| SimError::invalid_argument("run_info.json", e.to_string()))?;
+    crate::output::write_text(out_dir.join(RUN_INFO_FILE), &(json + "\n"))?;
+    Ok((result, info))
+}
+
+/// Create `dir`, or accept it if empty or made by an earlier `fathom run`; then remove
+/// the outputs of that earlier run.
+fn prepare_out_dir(dir: &Path) -> Result<(), SimError> {
+    std::fs::create_dir_all(dir).map_err(|e| SimError::io("create directory", dir, e))?;
+    let mut entries = std::fs::read_dir(dir).map_err(|e| SimError::io("list directory", dir, e))?;
+    let empty = entries.next().is_none();
+    if !empty && !dir.join(RUN_INFO_FILE).is_file() {
+        return Err(SimError::invalid_argument(
+            "--out",
+            format!(
+                "`{}` is not empty and holds no {RUN_INFO_FILE} of an earlier `fathom run`; \
+                 choose a new or empty folder",
+                dir.display()
+            ),
+        ));
+    }
+    for name in [RUN_INFO_FILE, "scenario.toml", "scenario.resolved.toml"] {
+        let p = dir.join(name);
+        if p.is_file() {
+            std::fs::remove_file(&p).map_err(|e| SimError::io("remove", &p, e))?;
+        }
+    }
+    let entries = std::fs::read_dir(dir).map_err(|e| SimError::io("list directory", dir, e))?;
+    for entry in entries {
+        let p = entry
+            .map_err(|e| SimError::io("list directory", dir, e))?
+            .path();
+        let stale = p.is_file()
+            && p.extension()
+                .and_then(|x| x.to_str())
+                .is_some_and(|x| matches!(x, "svg" | "csv" | "json" | "md"));
+        if stale {
+            std::fs::remove_file(&p).map_err(|e| SimError::io("remove", &p, e))?;
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_preset_checks_and_round_trips() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let reg = experiments::registry();
+        for exp in &reg {
+            let c = check_scenario(&root.join(exp.default_scenario), &reg).unwrap();
+            assert_eq!(c.experiment, exp.name);
+            assert!(c.keys > 5, "{}: {} keys", exp.name, c.keys);
+            // The resolved TOML is itself a valid scenario.
+            let again = check_scenario_text(&c.resolved_toml, "resolved", &reg).unwrap();
+            assert_eq!(again.resolved_toml, c.resolved_toml);
+        }
+    }
+
+    #[test]
+    fn experiment_key_errors() {
+        let reg = experiments::registry();
+        let e = check_scenario_text("runs = 3\n", "a.toml", &reg).unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("a.toml: key `experiment`: missing"),
+            "{e}"
+        );
+        let e = check_scenario_text("experiment = \"x\"\n", "a.toml", &reg).unwrap_err();
+        assert!(e.to_string().contains("unknown experiment \"x\""), "{e}");
+        let e = check_scenario_text("experiment = 3\n", "a.toml", &reg).unwrap_err();
+        assert!(e.to_string().contains("must be a string"), "{e}");
+    }
+}
