@@ -9,6 +9,7 @@ pub mod beacons;
 pub mod common;
 pub mod fusion;
 pub mod noise;
+pub mod single_run;
 pub mod vkf;
 
 use crate::experiment::Experiment;
