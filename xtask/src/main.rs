@@ -1,6 +1,10 @@
 //! Project automation. `cargo xtask paper [--only NAME] [--runs N] [--threads T]`
 //! reproduces the papers' experiments into `target/paper/` (see
-//! `shared/spec/README.md`, "Output contract").
+//! `shared/spec/README.md`, "Output contract"); `cargo xtask bench [--compare]
+//! [FILTER]` runs the benchmarks into `target/bench/bench.json` (see
+//! `docs/performance.md`).
+
+mod bench;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -14,17 +18,28 @@ usage: cargo xtask <command> [options]
 commands:
   paper    run the paper experiments, write target/paper/<experiment>/ and
            target/paper/REPORT.md, print paper-versus-reproduced tables
+  bench    run the criterion benchmarks (cargo bench --workspace), write
+           target/bench/bench.json and print a table with the performance targets
   help     show this message
 
 options of `paper`:
   --only NAME     run only experiment NAME
   --runs N        override every experiment's Monte Carlo run count (N >= 1)
-  --threads T     worker threads (T >= 1; default: all cores)";
+  --threads T     worker threads (T >= 1; default: all cores)
+
+options of `bench`:
+  --compare       also time FilterPy's KalmanFilter on the same 6/3 problem
+                  (needs python3 + filterpy; skipped with a message otherwise)
+  FILTER          only benchmarks whose name contains FILTER (criterion filter)";
 
 /// A parsed command line.
 #[derive(Debug, PartialEq, Eq)]
 enum Command {
     Help,
+    Bench {
+        compare: bool,
+        filter: Option<String>,
+    },
     Paper {
         only: Option<String>,
         runs: Option<usize>,
@@ -40,6 +55,7 @@ fn parse_args(args: &[String]) -> Result<Command, String> {
     match cmd.as_str() {
         "help" | "-h" | "--help" => return Ok(Command::Help),
         "paper" => {}
+        "bench" => return parse_bench(rest),
         other => return Err(format!("unknown command `{other}`")),
     }
     let (mut only, mut runs, mut threads) = (None, None, None);
@@ -89,6 +105,21 @@ fn parse_args(args: &[String]) -> Result<Command, String> {
     })
 }
 
+/// `bench [--compare] [FILTER]`.
+fn parse_bench(rest: &[String]) -> Result<Command, String> {
+    let (mut compare, mut filter) = (false, None);
+    for arg in rest {
+        match arg.as_str() {
+            "-h" | "--help" => return Ok(Command::Help),
+            "--compare" => compare = true,
+            a if a.starts_with('-') => return Err(format!("unknown option `{a}`")),
+            a if filter.is_none() => filter = Some(a.to_string()),
+            a => return Err(format!("unexpected argument `{a}` (one FILTER at most)")),
+        }
+    }
+    Ok(Command::Bench { compare, filter })
+}
+
 /// The workspace root: the parent of this crate's manifest directory.
 fn workspace_root() -> Result<PathBuf> {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -127,6 +158,15 @@ fn main() -> ExitCode {
         Ok(Command::Help) => {
             println!("{USAGE}");
             ExitCode::SUCCESS
+        }
+        Ok(Command::Bench { compare, filter }) => {
+            match workspace_root().and_then(|root| bench::run(&root, compare, filter.as_deref())) {
+                Ok(()) => ExitCode::SUCCESS,
+                Err(e) => {
+                    eprintln!("error: {e:#}");
+                    ExitCode::FAILURE
+                }
+            }
         }
         Ok(Command::Paper {
             only,
@@ -170,6 +210,22 @@ mod tests {
             })
         );
         assert_eq!(parse("help"), Ok(Command::Help));
+        assert_eq!(
+            parse("bench --compare kf_"),
+            Ok(Command::Bench {
+                compare: true,
+                filter: Some("kf_".into())
+            })
+        );
+        assert_eq!(
+            parse("bench"),
+            Ok(Command::Bench {
+                compare: false,
+                filter: None
+            })
+        );
+        assert!(parse("bench --fast").is_err());
+        assert!(parse("bench a b").is_err());
         assert_eq!(parse("paper --help"), Ok(Command::Help));
     }
 

@@ -3,15 +3,16 @@
 //! fixed-size path (errors aside).
 
 use crate::{
-    EstimatorError,
+    EstimatorError, MeasurementNoise,
     error::check_finite_entries,
     gating::{Gate, GateThreshold},
+    linalg,
 };
 use fathom_core::{
     Gaussian, Time,
     gaussian::{SYMMETRY_TOLERANCE, check_covariance, symmetrize},
 };
-use nalgebra::{Cholesky, Const, RowSVector, SMatrix, SVector};
+use nalgebra::{RowSVector, SMatrix, SVector};
 
 /// Diagnostics of an applied update: innovation `nu`, its covariance
 /// `S = H P H^T + R` and the NIS `nu^T S^-1 nu`.
@@ -85,6 +86,13 @@ impl SequentialReport {
 /// - predict: `x = F x (+ B u)`, `P = F P F^T + Q`, symmetrized;
 /// - update: `S = H P H^T + R`, `K = P H^T S^-1` (Cholesky solve),
 ///   `x = x + K nu`, `P = (I - K H) P (I - K H)^T + K R K^T`, symmetrized.
+///
+/// Cost: both covariance steps form one triangle and mirror it (exactly symmetric);
+/// the Joseph product is grouped as `A P - ((A P) H^T - K R) K^T` with
+/// `A P = P - K (P H^T)^T`, `O(N^2 M)` instead of `O(N^3)` (same matrix in exact
+/// arithmetic for any `K`). The positive-definiteness checks are a lean Cholesky
+/// (`N^3 / 6`). A constant `R` can be checked once with [`MeasurementNoise`]
+/// ([`KalmanFilter::update_with_noise`]). See `docs/performance.md`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KalmanFilter<const N: usize> {
     x: SVector<f64, N>,
@@ -96,7 +104,7 @@ pub struct KalmanFilter<const N: usize> {
 struct Prepared<const N: usize, const M: usize> {
     pht: SMatrix<f64, N, M>,
     s: SMatrix<f64, M, M>,
-    chol: Cholesky<f64, Const<M>>,
+    s_inv: SMatrix<f64, M, M>,
     nis: f64,
 }
 
@@ -110,7 +118,7 @@ impl<const N: usize> KalmanFilter<N> {
     pub fn new(prior: Gaussian<N>, time: Time) -> Result<Self, EstimatorError> {
         check_time("initial time", time, time)?;
         let (x, p) = prior.into_parts();
-        check_finite_entries("initial state x0", N, 1, |r, _| x[r], time)?;
+        check_finite("initial state x0", x.as_slice(), N, 1, time)?;
         check_covariance("initial covariance P0", &p)
             .map_err(|e| EstimatorError::from_core_at(e, time))?;
         Ok(Self {
@@ -146,7 +154,7 @@ impl<const N: usize> KalmanFilter<N> {
     /// # Errors
     /// [`EstimatorError::NonFinite`] naming "state x"; the filter is unchanged.
     pub fn set_state(&mut self, x: SVector<f64, N>) -> Result<(), EstimatorError> {
-        check_finite_entries("state x", N, 1, |r, _| x[r], self.time)?;
+        check_finite("state x", x.as_slice(), N, 1, self.time)?;
         self.x = x;
         Ok(())
     }
@@ -157,7 +165,7 @@ impl<const N: usize> KalmanFilter<N> {
     /// As [`KalmanFilter::new`], naming "state x" / "covariance P"; the filter is unchanged.
     pub fn set_estimate(&mut self, estimate: Gaussian<N>) -> Result<(), EstimatorError> {
         let (x, p) = estimate.into_parts();
-        check_finite_entries("state x", N, 1, |r, _| x[r], self.time)?;
+        check_finite("state x", x.as_slice(), N, 1, self.time)?;
         check_covariance("covariance P", &p)
             .map_err(|e| EstimatorError::from_core_at(e, self.time))?;
         self.x = x;
@@ -182,7 +190,7 @@ impl<const N: usize> KalmanFilter<N> {
         new_time: Time,
     ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
-        check_finite_entries("transition matrix F", N, N, |r, c| f[(r, c)], new_time)?;
+        check_finite("transition matrix F", f.as_slice(), N, N, new_time)?;
         let x_pred = f * self.x;
         self.predict_core(x_pred, f, q, new_time)
     }
@@ -201,9 +209,9 @@ impl<const N: usize> KalmanFilter<N> {
         new_time: Time,
     ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
-        check_finite_entries("transition matrix F", N, N, |r, c| f[(r, c)], new_time)?;
-        check_finite_entries("control matrix B", N, U, |r, c| b[(r, c)], new_time)?;
-        check_finite_entries("control input u", U, 1, |r, _| u[r], new_time)?;
+        check_finite("transition matrix F", f.as_slice(), N, N, new_time)?;
+        check_finite("control matrix B", b.as_slice(), N, U, new_time)?;
+        check_finite("control input u", u.as_slice(), U, 1, new_time)?;
         let x_pred = f * self.x + b * u;
         self.predict_core(x_pred, f, q, new_time)
     }
@@ -221,16 +229,17 @@ impl<const N: usize> KalmanFilter<N> {
         new_time: Time,
     ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
-        check_finite_entries(
+        check_finite(
             "transition Jacobian F",
+            f_jacobian.as_slice(),
             N,
             N,
-            |r, c| f_jacobian[(r, c)],
             new_time,
         )?;
         self.predict_core(*x_pred, f_jacobian, q, new_time)
     }
 
+    #[inline]
     fn predict_core(
         &mut self,
         x_pred: SVector<f64, N>,
@@ -238,9 +247,9 @@ impl<const N: usize> KalmanFilter<N> {
         q: &SMatrix<f64, N, N>,
         new_time: Time,
     ) -> Result<(), EstimatorError> {
-        check_finite_entries("predicted state x", N, 1, |r, _| x_pred[r], new_time)?;
+        check_finite("predicted state x", x_pred.as_slice(), N, 1, new_time)?;
         check_process_noise(q, new_time)?;
-        let p_pred = symmetrize(&(f * self.p * f.transpose() + q));
+        let p_pred = linalg::propagate_covariance(f, &self.p, q);
         check_pd("predicted covariance P", &p_pred, new_time)?;
         self.x = x_pred;
         self.p = p_pred;
@@ -262,11 +271,11 @@ impl<const N: usize> KalmanFilter<N> {
         h: &SMatrix<f64, M, N>,
         r: &SMatrix<f64, M, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        check_finite_entries("measurement z", M, 1, |i, _| z[i], self.time)?;
-        check_finite_entries("measurement matrix H", M, N, |i, j| h[(i, j)], self.time)?;
+        check_finite("measurement z", z.as_slice(), M, 1, self.time)?;
+        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
         let nu = z - h * self.x;
-        let prep = self.prepare(&nu, h, r)?;
-        self.apply(&nu, h, r, prep)
+        let prep = self.prepare(&nu, h, r, true)?;
+        self.apply(&nu, prep)
     }
 
     /// Update with a given innovation `nu` (EKF: `nu = z - h(x)`, `H = dh/dx` at `x`);
@@ -280,10 +289,54 @@ impl<const N: usize> KalmanFilter<N> {
         h: &SMatrix<f64, M, N>,
         r: &SMatrix<f64, M, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        check_finite_entries("innovation nu", M, 1, |i, _| nu[i], self.time)?;
-        check_finite_entries("measurement matrix H", M, N, |i, j| h[(i, j)], self.time)?;
-        let prep = self.prepare(nu, h, r)?;
-        self.apply(nu, h, r, prep)
+        check_finite("innovation nu", nu.as_slice(), M, 1, self.time)?;
+        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
+        let prep = self.prepare(nu, h, r, true)?;
+        self.apply(nu, prep)
+    }
+
+    /// [`KalmanFilter::update`] with a measurement noise checked once at construction
+    /// ([`MeasurementNoise`]): the same numbers, without re-validating `R` every step.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::update`], except that `R` is not re-checked.
+    pub fn update_with_noise<const M: usize>(
+        &mut self,
+        z: &SVector<f64, M>,
+        h: &SMatrix<f64, M, N>,
+        noise: &MeasurementNoise<M>,
+    ) -> Result<UpdateInfo<M>, EstimatorError> {
+        check_finite("measurement z", z.as_slice(), M, 1, self.time)?;
+        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
+        let nu = z - h * self.x;
+        let r = noise.matrix();
+        let prep = self.prepare(&nu, h, r, false)?;
+        self.apply(&nu, prep)
+    }
+
+    /// Update with a given innovation and a checked noise, optionally gated: the
+    /// [`MeasurementNoise`] flavour of [`KalmanFilter::update_with_innovation`] (`gate =
+    /// None`, always [`Gate::Accepted`]) and [`KalmanFilter::update_with_innovation_gated`].
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::update_with_innovation`], except that `R` is not re-checked.
+    pub fn update_with_innovation_and_noise<const M: usize>(
+        &mut self,
+        nu: &SVector<f64, M>,
+        h: &SMatrix<f64, M, N>,
+        noise: &MeasurementNoise<M>,
+        gate: Option<GateThreshold>,
+    ) -> Result<Gate<M>, EstimatorError> {
+        check_finite("innovation nu", nu.as_slice(), M, 1, self.time)?;
+        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
+        let r = noise.matrix();
+        let prep = self.prepare(nu, h, r, false)?;
+        if let Some(g) = gate
+            && !g.accepts(prep.nis)
+        {
+            return Ok(Gate::Rejected { nis: prep.nis });
+        }
+        self.apply(nu, prep).map(Gate::Accepted)
     }
 
     /// Gated linear update: computes the NIS first and applies the update only when
@@ -298,8 +351,8 @@ impl<const N: usize> KalmanFilter<N> {
         r: &SMatrix<f64, M, M>,
         gate: GateThreshold,
     ) -> Result<Gate<M>, EstimatorError> {
-        check_finite_entries("measurement z", M, 1, |i, _| z[i], self.time)?;
-        check_finite_entries("measurement matrix H", M, N, |i, j| h[(i, j)], self.time)?;
+        check_finite("measurement z", z.as_slice(), M, 1, self.time)?;
+        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
         let nu = z - h * self.x;
         self.gated_core(&nu, h, r, gate)
     }
@@ -315,8 +368,8 @@ impl<const N: usize> KalmanFilter<N> {
         r: &SMatrix<f64, M, M>,
         gate: GateThreshold,
     ) -> Result<Gate<M>, EstimatorError> {
-        check_finite_entries("innovation nu", M, 1, |i, _| nu[i], self.time)?;
-        check_finite_entries("measurement matrix H", M, N, |i, j| h[(i, j)], self.time)?;
+        check_finite("innovation nu", nu.as_slice(), M, 1, self.time)?;
+        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
         self.gated_core(nu, h, r, gate)
     }
 
@@ -327,49 +380,50 @@ impl<const N: usize> KalmanFilter<N> {
         r: &SMatrix<f64, M, M>,
         gate: GateThreshold,
     ) -> Result<Gate<M>, EstimatorError> {
-        let prep = self.prepare(nu, h, r)?;
+        let prep = self.prepare(nu, h, r, true)?;
         if !gate.accepts(prep.nis) {
             return Ok(Gate::Rejected { nis: prep.nis });
         }
-        self.apply(nu, h, r, prep).map(Gate::Accepted)
+        self.apply(nu, prep).map(Gate::Accepted)
     }
 
-    /// Checks `R`, forms `S = H P H^T + R`, factors it and computes the NIS.
-    /// `nu` and `H` are already checked finite.
+    /// Checks `R` (when `check_r`; a [`MeasurementNoise`] is checked already), forms
+    /// `S = H P H^T + R`, factors it and computes the NIS. `nu` and `H` are already
+    /// checked finite.
+    #[inline]
     fn prepare<const M: usize>(
         &self,
         nu: &SVector<f64, M>,
         h: &SMatrix<f64, M, N>,
         r: &SMatrix<f64, M, M>,
+        check_r: bool,
     ) -> Result<Prepared<N, M>, EstimatorError> {
-        check_covariance("measurement noise R", r)
-            .map_err(|e| EstimatorError::from_core_at(e, self.time))?;
+        if check_r {
+            check_covariance("measurement noise R", r)
+                .map_err(|e| EstimatorError::from_core_at(e, self.time))?;
+        }
         let pht = self.p * h.transpose();
         let s = symmetrize(&(h * pht + r));
-        let chol = s
-            .cholesky()
-            .ok_or_else(|| EstimatorError::NotPositiveDefinite {
-                what: "innovation covariance S".into(),
-                time: self.time,
-            })?;
-        let nis = nu.dot(&chol.solve(nu));
-        Ok(Prepared { pht, s, chol, nis })
+        let s_inv = linalg::spd_inverse(&s).ok_or_else(|| EstimatorError::NotPositiveDefinite {
+            what: "innovation covariance S".into(),
+            time: self.time,
+        })?;
+        let nis = nu.dot(&(s_inv * nu));
+        Ok(Prepared { pht, s, s_inv, nis })
     }
 
     /// Gain, Joseph-form covariance, PD check, commit.
+    #[inline]
     fn apply<const M: usize>(
         &mut self,
         nu: &SVector<f64, M>,
-        h: &SMatrix<f64, M, N>,
-        r: &SMatrix<f64, M, M>,
         prep: Prepared<N, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        // K^T = S^-1 (P H^T)^T, S symmetric.
-        let k: SMatrix<f64, N, M> = prep.chol.solve(&prep.pht.transpose()).transpose();
+        // K = P H^T S^-1.
+        let k: SMatrix<f64, N, M> = prep.pht * prep.s_inv;
         let x_new = self.x + k * nu;
-        let ikh = SMatrix::<f64, N, N>::identity() - k * h;
-        let p_new = symmetrize(&(ikh * self.p * ikh.transpose() + k * r * k.transpose()));
-        check_finite_entries("updated state x", N, 1, |i, _| x_new[i], self.time)?;
+        let p_new = linalg::joseph_update(&self.p, &prep.pht, &k, &prep.s);
+        check_finite("updated state x", x_new.as_slice(), N, 1, self.time)?;
         check_pd("updated covariance P", &p_new, self.time)?;
         self.x = x_new;
         self.p = p_new;
@@ -484,10 +538,9 @@ impl<const N: usize> KalmanFilter<N> {
             }
             let k = pht / s;
             x += k * m.innovation;
-            let ikh = SMatrix::<f64, N, N>::identity() - k * m.h_row;
-            p = symmetrize(&(ikh * p * ikh.transpose() + k * k.transpose() * m.variance));
+            p = linalg::joseph_update_scalar(&p, &pht, &k, s);
         }
-        check_finite_entries("updated state x", N, 1, |i, _| x[i], t)?;
+        check_finite("updated state x", x.as_slice(), N, 1, t)?;
         check_pd("updated covariance P", &p, t)?;
         self.x = x;
         self.p = p;
@@ -502,7 +555,7 @@ impl<const N: usize> KalmanFilter<N> {
         p: SMatrix<f64, N, N>,
     ) -> Result<(), EstimatorError> {
         let p = symmetrize(&p);
-        check_finite_entries("updated state x", N, 1, |i, _| x[i], self.time)?;
+        check_finite("updated state x", x.as_slice(), N, 1, self.time)?;
         check_pd("updated covariance P", &p, self.time)?;
         self.x = x;
         self.p = p;
@@ -529,13 +582,30 @@ fn check_time(what: &str, new_time: Time, current: Time) -> Result<(), Estimator
     Ok(())
 }
 
+/// Finite entries of a fixed-size matrix stored column-major in `data` (`rows x
+/// cols`): a vectorizable fast path, and the row-major index of the first non-finite
+/// entry (as [`check_finite_entries`]) only when there is one.
+#[inline]
+fn check_finite(
+    what: &str,
+    data: &[f64],
+    rows: usize,
+    cols: usize,
+    time: Time,
+) -> Result<(), EstimatorError> {
+    if data.iter().all(|v| v.is_finite()) {
+        return Ok(());
+    }
+    check_finite_entries(what, rows, cols, |r, c| data[c * rows + r], time)
+}
+
 /// `Q`: finite, symmetric (relative tolerance as `fathom_core`), non-negative diagonal.
 fn check_process_noise<const N: usize>(
     q: &SMatrix<f64, N, N>,
     time: Time,
 ) -> Result<(), EstimatorError> {
     const WHAT: &str = "process noise Q";
-    check_finite_entries(WHAT, N, N, |r, c| q[(r, c)], time)?;
+    check_finite(WHAT, q.as_slice(), N, N, time)?;
     let mut scale = f64::MIN_POSITIVE;
     for i in 0..N {
         let d = q[(i, i)];
@@ -565,13 +635,14 @@ fn check_process_noise<const N: usize>(
 }
 
 /// Finite and positive definite (Cholesky succeeds).
+#[inline]
 fn check_pd<const N: usize>(
     what: &str,
     p: &SMatrix<f64, N, N>,
     time: Time,
 ) -> Result<(), EstimatorError> {
-    check_finite_entries(what, N, N, |r, c| p[(r, c)], time)?;
-    if p.cholesky().is_none() {
+    check_finite(what, p.as_slice(), N, N, time)?;
+    if !linalg::is_positive_definite(p) {
         return Err(EstimatorError::NotPositiveDefinite {
             what: what.to_owned(),
             time,

@@ -40,7 +40,11 @@ pub const M_GEODETIC: f64 = OMEGA_IE * OMEGA_IE * A * A * B / GM;
 /// R_N(L) = a (1 - e^2) / (1 - e^2 sin^2 L)^(3/2)          (Groves eq. 2.105)
 /// ```
 pub fn meridian_radius(lat: f64) -> f64 {
-    let s = lat.sin();
+    meridian_radius_from_sin(lat.sin())
+}
+
+/// [`meridian_radius`] from `sin L` (the strapdown evaluates `sin L` once per step).
+pub(crate) fn meridian_radius_from_sin(s: f64) -> f64 {
     let d = 1.0 - E2 * s * s;
     A * (1.0 - E2) / (d * d.sqrt())
 }
@@ -51,7 +55,11 @@ pub fn meridian_radius(lat: f64) -> f64 {
 /// R_E(L) = a / sqrt(1 - e^2 sin^2 L)                       (Groves eq. 2.106)
 /// ```
 pub fn transverse_radius(lat: f64) -> f64 {
-    let s = lat.sin();
+    transverse_radius_from_sin(lat.sin())
+}
+
+/// [`transverse_radius`] from `sin L`.
+pub(crate) fn transverse_radius_from_sin(s: f64) -> f64 {
     A / (1.0 - E2 * s * s).sqrt()
 }
 
@@ -76,9 +84,14 @@ pub fn somigliana_gravity(lat: f64) -> f64 {
 /// north component of normal gravity off the ellipsoid, < 1e-5 m/s^2 at 1 km, is
 /// neglected).
 pub fn normal_gravity(lat: f64, h: f64) -> f64 {
-    let s2 = lat.sin().powi(2);
-    somigliana_gravity(lat)
-        * (1.0 - 2.0 / A * (1.0 + F + M_GEODETIC - 2.0 * F * s2) * h + 3.0 / (A * A) * h * h)
+    normal_gravity_from_sin(lat.sin(), h)
+}
+
+/// [`normal_gravity`] from `sin L`.
+pub(crate) fn normal_gravity_from_sin(s: f64, h: f64) -> f64 {
+    let s2 = s.powi(2);
+    let gamma_0 = GAMMA_EQUATOR * (1.0 + SOMIGLIANA_K * s2) / (1.0 - E2 * s2).sqrt();
+    gamma_0 * (1.0 - 2.0 / A * (1.0 + F + M_GEODETIC - 2.0 * F * s2) * h + 3.0 / (A * A) * h * h)
 }
 
 /// Derivative of [`normal_gravity`] with respect to height, `d gamma / d h`, 1/s^2

@@ -45,7 +45,7 @@
 
 use nalgebra::Vector3;
 
-use crate::earth::{self, earth_rate_in_nav, gravity_in_nav, transport_rate_in_nav};
+use crate::earth::{self, OMEGA_IE};
 use crate::error::InsError;
 use crate::rotation::quat_from_rotation_vector;
 use crate::state::{ImuIncrement, InsState};
@@ -102,11 +102,31 @@ pub(crate) fn mid_terms(
         }
         None => (lat, h, *vel),
     };
-    let w_ie = earth_rate_in_nav(lat_m);
-    let w_en = transport_rate_in_nav(lat_m, h_m, &vel_m);
+    // One sin/cos of the mid latitude for every Earth-model term (the same formulas
+    // as earth::{earth_rate_in_nav, transport_rate_in_nav, gravity_in_nav}).
+    let (s, c) = lat_m.sin_cos();
+    let w_ie = Vector3::new(OMEGA_IE * c, 0.0, -OMEGA_IE * s);
+    let re = earth::transverse_radius_from_sin(s) + h_m;
+    let rn = earth::meridian_radius_from_sin(s) + h_m;
+    let w_en = Vector3::new(vel_m.y / re, -vel_m.x / rn, -vel_m.y * (s / c) / re);
+    let g = Vector3::new(0.0, 0.0, earth::normal_gravity_from_sin(s, h_m));
     MidTerms {
         zeta: (w_ie + w_en) * dt,
-        dv_grav_cor: (gravity_in_nav(lat_m, h_m) - (w_ie * 2.0 + w_en).cross(&vel_m)) * dt,
+        dv_grav_cor: (g - (w_ie * 2.0 + w_en).cross(&vel_m)) * dt,
+    }
+}
+
+/// `(sin, cos)` of `lat + d` from `(sin, cos)` of `lat`: the angle-sum formula with
+/// `cos d = 1 - d^2/2` and `sin d = d - d^3/6`, whose truncation errors (`d^4/24`,
+/// `d^5/120`) are below double rounding for `|d| < 1e-4` rad (640 m of latitude: a
+/// strapdown step moves ~1e-8 rad); exact `sin_cos` otherwise.
+fn sin_cos_offset((s, c): (f64, f64), lat: f64, d: f64) -> (f64, f64) {
+    if d.abs() < 1e-4 {
+        let d2 = d * d;
+        let (cd, sd) = (1.0 - 0.5 * d2, d * (1.0 - d2 / 6.0));
+        (s * cd + c * sd, c * cd - s * sd)
+    } else {
+        (lat + d).sin_cos()
     }
 }
 
@@ -138,10 +158,13 @@ pub(crate) fn position_update(
     let dr = (vel_prev + vel) * (0.5 * dt);
     let h_new = h - dr.z;
     let h_m = 0.5 * (h + h_new);
-    let lat_pred = lat + dr.x / (earth::meridian_radius(lat) + h_m);
-    let lat_new = lat + dr.x / (earth::meridian_radius(0.5 * (lat + lat_pred)) + h_m);
-    let lat_m = 0.5 * (lat + lat_new);
-    let lon_new = lon + dr.y / ((earth::transverse_radius(lat_m) + h_m) * lat_m.cos());
+    // One sin/cos of `lat`; the mid-point latitudes are offsets of it.
+    let sc = lat.sin_cos();
+    let lat_pred = lat + dr.x / (earth::meridian_radius_from_sin(sc.0) + h_m);
+    let (s_p, _) = sin_cos_offset(sc, lat, 0.5 * (lat_pred - lat));
+    let lat_new = lat + dr.x / (earth::meridian_radius_from_sin(s_p) + h_m);
+    let (s_m, c_m) = sin_cos_offset(sc, lat, 0.5 * (lat_new - lat));
+    let lon_new = lon + dr.y / ((earth::transverse_radius_from_sin(s_m) + h_m) * c_m);
     (lat_new, lon_new, h_new)
 }
 

@@ -1561,6 +1561,14 @@ pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
     crate::scenario::to_toml(&scenario, file)
 }
 
+/// One Monte Carlo run (every case and scheme) on the default scenario (for the
+/// benchmarks, [`crate::experiments::single_run`]).
+pub(crate) fn single_run(ctx: &ExperimentContext) -> Result<super::single_run::RunFn, SimError> {
+    let scenario: BeaconsScenario = ctx.load_scenario()?;
+    let checked = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    Ok(Box::new(move |rng| one_run(&checked, rng).map(|_| ())))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

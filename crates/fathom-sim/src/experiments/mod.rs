@@ -10,6 +10,7 @@ pub mod common;
 pub mod fusion;
 pub mod noise;
 pub mod plaza;
+pub mod single_run;
 pub mod vkf;
 
 use crate::experiment::Experiment;

@@ -774,6 +774,17 @@ pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
     crate::scenario::to_toml(&scenario, file)
 }
 
+/// One Monte Carlo run of every method on the default scenario (for the benchmarks,
+/// [`crate::experiments::single_run`]); scenario and mission prepared once.
+pub(crate) fn single_run(ctx: &ExperimentContext) -> Result<super::single_run::RunFn, SimError> {
+    let scenario: FusionScenario = ctx.load_scenario()?;
+    let setup = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    let mission = setup.mission()?;
+    Ok(Box::new(move |rng| {
+        run_once(&setup, &setup.run, &mission, &Method::ALL, false, rng).map(|_| ())
+    }))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

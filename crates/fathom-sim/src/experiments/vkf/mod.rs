@@ -894,3 +894,15 @@ fn report_section(
     );
     s
 }
+
+/// One Monte Carlo run (27 min at 100 Hz, all five methods) on the default scenario
+/// (for the benchmarks, [`crate::experiments::single_run`]); the shared truth is
+/// built once.
+pub(crate) fn single_run(ctx: &ExperimentContext) -> Result<super::single_run::RunFn, SimError> {
+    let scenario: VkfScenario = ctx.load_scenario()?;
+    let c = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    let shared = sim::build_shared(&c)?;
+    Ok(Box::new(move |rng| {
+        sim::one_run(&c, &shared, &c.dvl, rng, false).map(|_| ())
+    }))
+}

@@ -1,0 +1,275 @@
+//! Per-step cost of the estimators (criterion): KF predict+update (6/3 and 9/3),
+//! one EKF range update, one AS / SC / SI epoch of the beacons filter, one 15-state
+//! error-state prediction. Run with `cargo xtask bench` (or `cargo bench -p
+//! fathom-estimators`); see `docs/performance.md`.
+
+use std::hint::black_box;
+
+use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use fathom_core::Gaussian;
+use fathom_estimators::{
+    GateThreshold, KalmanFilter, MeasurementNoise,
+    beacon_ekf::{BeaconMeasurement, DvlAhrsInput, DvlAhrsMotion, DvlAhrsMotionParams},
+    ekf::{Ekf, GroupItem},
+    error_state::{ErrorCovariance, ErrorStateFilter},
+    models,
+    schemes::{Event, Observation, SchemeFilter, SchemeParams, UpdateScheme},
+};
+use nalgebra::{DMatrix, Matrix3, Matrix4, SMatrix, SVector, Vector3, Vector4};
+
+const DT: f64 = 0.1;
+
+/// 3-D constant velocity: x = [p, v], z = p + noise (6 states, 3 measurements).
+fn kf_6_3(c: &mut Criterion) {
+    let f = models::cv_transition_3d(DT).unwrap();
+    let q = models::cv_white_accel_q_3d(DT, [0.1, 0.1, 0.05]).unwrap();
+    let h = models::cv_position_h_3d();
+    let r = Matrix3::new(0.25, 0.02, 0.0, 0.02, 0.25, 0.01, 0.0, 0.01, 0.5);
+    let z = Vector3::new(1.0, -2.0, 0.5);
+    let prior =
+        Gaussian::new(SVector::<f64, 6>::zeros(), SMatrix::<f64, 6, 6>::identity()).unwrap();
+    let mut kf = KalmanFilter::new(prior.clone(), 0.0).unwrap();
+    let mut t = 0.0;
+    c.bench_function("kf_6x3_predict_update", |b| {
+        b.iter(|| {
+            t += DT;
+            kf.predict(black_box(&f), black_box(&q), t).unwrap();
+            black_box(
+                kf.update(black_box(&z), black_box(&h), black_box(&r))
+                    .unwrap(),
+            );
+        })
+    });
+    // Reference: the textbook step in plain nalgebra, no checks, standard Joseph
+    // product form (what "a fixed-size nalgebra filter" costs).
+    let (mut x, mut p) = (SVector::<f64, 6>::zeros(), SMatrix::<f64, 6, 6>::identity());
+    c.bench_function("nalgebra_reference_6x3_predict_update", |b| {
+        b.iter(|| {
+            let (f, q, h, r, z) = (
+                black_box(&f),
+                black_box(&q),
+                black_box(&h),
+                black_box(&r),
+                black_box(&z),
+            );
+            x = f * x;
+            p = f * p * f.transpose() + q;
+            let pht = p * h.transpose();
+            let s = h * pht + r;
+            let k = pht * s.try_inverse().unwrap();
+            x += k * (z - h * x);
+            let a = SMatrix::<f64, 6, 6>::identity() - k * h;
+            p = a * p * a.transpose() + k * r * k.transpose();
+            black_box(&p);
+        })
+    });
+    // The same step with the measurement noise checked once (MeasurementNoise).
+    let noise = MeasurementNoise::new(r).unwrap();
+    let mut kf = KalmanFilter::new(prior, 0.0).unwrap();
+    let mut t = 0.0;
+    c.bench_function("kf_6x3_predict_update_checked_r", |b| {
+        b.iter(|| {
+            t += DT;
+            kf.predict(black_box(&f), black_box(&q), t).unwrap();
+            black_box(
+                kf.update_with_noise(black_box(&z), black_box(&h), black_box(&noise))
+                    .unwrap(),
+            );
+        })
+    });
+}
+
+/// 3-D constant acceleration: x = [p, v, a], z = p + noise (9 states, 3 measurements).
+fn kf_9_3(c: &mut Criterion) {
+    let mut f = SMatrix::<f64, 9, 9>::identity();
+    let mut q = SMatrix::<f64, 9, 9>::zeros();
+    let s = 0.05; // jerk PSD
+    for i in 0..3 {
+        f[(i, 3 + i)] = DT;
+        f[(i, 6 + i)] = 0.5 * DT * DT;
+        f[(3 + i, 6 + i)] = DT;
+        let (d5, d4, d3, d2) = (DT.powi(5), DT.powi(4), DT.powi(3), DT * DT);
+        let blk = [
+            [d5 / 20.0, d4 / 8.0, d3 / 6.0],
+            [d4 / 8.0, d3 / 3.0, d2 / 2.0],
+            [d3 / 6.0, d2 / 2.0, DT],
+        ];
+        for a in 0..3 {
+            for bb in 0..3 {
+                q[(3 * a + i, 3 * bb + i)] = s * blk[a][bb];
+            }
+        }
+    }
+    let mut h = SMatrix::<f64, 3, 9>::zeros();
+    h.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&Matrix3::identity());
+    let r = Matrix3::from_diagonal(&Vector3::new(0.25, 0.25, 0.5));
+    let z = Vector3::new(1.0, -2.0, 0.5);
+    let prior =
+        Gaussian::new(SVector::<f64, 9>::zeros(), SMatrix::<f64, 9, 9>::identity()).unwrap();
+    let mut kf = KalmanFilter::new(prior, 0.0).unwrap();
+    let mut t = 0.0;
+    c.bench_function("kf_9x3_predict_update", |b| {
+        b.iter(|| {
+            t += DT;
+            kf.predict(black_box(&f), black_box(&q), t).unwrap();
+            black_box(
+                kf.update(black_box(&z), black_box(&h), black_box(&r))
+                    .unwrap(),
+            );
+        })
+    });
+}
+
+const BEACONS: [[f64; 3]; 4] = [
+    [15.0, 15.0, 0.0],
+    [-15.0, 15.0, 40.0],
+    [-15.0, -15.0, 0.0],
+    [15.0, -15.0, 40.0],
+];
+
+fn motion() -> DvlAhrsMotion {
+    DvlAhrsMotionParams {
+        vel_sigma: [0.14, 0.05, 0.18],
+        vel_hold: 0.1,
+        yaw_rate_sigma: 0.14,
+        yaw_rate_hold: 0.1,
+    }
+    .check()
+    .unwrap()
+}
+
+fn beacon_ekf() -> Ekf<4, DvlAhrsMotion> {
+    let prior = Gaussian::new(
+        Vector4::new(1.0, -0.5, 3.0, 0.3),
+        Matrix4::from_diagonal(&Vector4::new(0.04, 0.05, 0.03, 0.01)),
+    )
+    .unwrap();
+    let input = DvlAhrsInput {
+        vel_in_body: Vector3::new(0.5, 0.0, 0.2),
+        yaw_rate: 0.05,
+    };
+    Ekf::new(prior, 0.0, motion(), input).unwrap()
+}
+
+fn model(c: usize) -> BeaconMeasurement {
+    if c < 4 {
+        BeaconMeasurement::Range {
+            beacon_in_nav: Vector3::from(BEACONS[c]),
+        }
+    } else {
+        BeaconMeasurement::Depth
+    }
+}
+
+/// One gated scalar range update of the 4-state beacon EKF.
+fn ekf_range(c: &mut Criterion) {
+    let ekf = beacon_ekf();
+    let m = model(0);
+    let z = 21.0;
+    let gate = Some(GateThreshold::from_sigma_distance(2.5).unwrap());
+    c.bench_function("ekf_range_update", |b| {
+        b.iter_batched_ref(
+            || ekf.clone(),
+            |f| {
+                let item = GroupItem {
+                    value: black_box(z),
+                    model: &m,
+                    variance: 0.01,
+                    gate,
+                };
+                black_box(f.update_sequential(&[item]).unwrap());
+            },
+            BatchSize::SmallInput,
+        )
+    });
+}
+
+/// One epoch of the beacons filter: 4 ranges and a depth (stamped 3 ms before the
+/// epoch), then advance to the epoch (DVL/AHRS dead reckoning).
+fn beacon_epochs(c: &mut Criterion) {
+    let truth = Vector4::new(1.0, -0.5, 3.0, 0.3);
+    let z: [f64; 5] = std::array::from_fn(|ch| {
+        use fathom_estimators::ekf::ScalarModel;
+        model(ch).evaluate(&truth).unwrap().0 + 0.05
+    });
+    let gate = Some(GateThreshold::from_sigma_distance(2.5).unwrap());
+    let sigma_c2 = 0.05_f64.powi(2);
+    let cov = DMatrix::from_fn(5, 5, |i, j| match (i, j) {
+        (4, 4) => 0.04,
+        (4, _) | (_, 4) => 0.0,
+        _ if i == j => 0.01 + sigma_c2,
+        _ => sigma_c2,
+    });
+    for (scheme, name) in [
+        (UpdateScheme::Asynchronous, "beacons_epoch_as"),
+        (UpdateScheme::SynchronousCollective, "beacons_epoch_sc"),
+        (UpdateScheme::SynchronousIndividual, "beacons_epoch_si"),
+    ] {
+        let config = SchemeParams {
+            scheme,
+            epoch_period: 0.1,
+            stale_tolerance: 0.0,
+            channel_cov: cov.clone(),
+            gates: vec![gate, gate, gate, gate, None],
+        }
+        .check()
+        .unwrap();
+        let filter: SchemeFilter<4, DvlAhrsMotion, BeaconMeasurement> =
+            SchemeFilter::new(beacon_ekf(), config);
+        c.bench_function(name, |b| {
+            b.iter_batched_ref(
+                || filter.clone(),
+                |f| {
+                    for (ch, &value) in z.iter().enumerate() {
+                        f.process(Event::Measurement(Observation {
+                            channel: ch,
+                            stamp: 0.097,
+                            value: black_box(value),
+                            model: model(ch),
+                            tag: ch,
+                        }))
+                        .unwrap();
+                    }
+                    f.advance_to(0.1).unwrap();
+                },
+                BatchSize::SmallInput,
+            )
+        });
+    }
+}
+
+/// One 15-state error-state covariance prediction `P = Phi P Phi^T + Q_d` with a
+/// dense, realistic `Phi` (second-order) and `Q_d`.
+fn eskf_predict(c: &mut Criterion) {
+    let p0 = ErrorStateFilter::diagonal_covariance([3.0, 0.1, 1e-3, 1e-3, 1e-6]);
+    let mut f = ErrorCovariance::zeros();
+    for i in 0..15 {
+        for j in 0..15 {
+            f[(i, j)] = 1e-3 * (((i * 7 + j * 3) % 11) as f64 - 5.0);
+        }
+    }
+    let fdt = f * 0.2;
+    let phi = ErrorCovariance::identity() + fdt + fdt * fdt * 0.5;
+    let qd = ErrorCovariance::from_diagonal(&SVector::<f64, 15>::from_fn(|i, _| {
+        1e-8 * (1.0 + i as f64)
+    }));
+    let filter = ErrorStateFilter::new(&p0, 0.0).unwrap();
+    c.bench_function("eskf_15_predict", |b| {
+        b.iter_batched_ref(
+            || filter.clone(),
+            |f| f.predict(black_box(&phi), black_box(&qd), 0.2).unwrap(),
+            BatchSize::SmallInput,
+        )
+    });
+}
+
+criterion_group!(
+    benches,
+    kf_6_3,
+    kf_9_3,
+    ekf_range,
+    beacon_epochs,
+    eskf_predict
+);
+criterion_main!(benches);

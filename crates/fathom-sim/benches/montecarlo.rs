@@ -1,0 +1,59 @@
+//! One Monte Carlo run of each paper experiment (default scenario, all methods), and
+//! the thread scaling of a Monte Carlo batch (the same 8 `beacons` runs with 1 and
+//! with 2 worker threads). Run with `cargo xtask bench`; see `docs/performance.md`.
+
+use std::hint::black_box;
+use std::path::PathBuf;
+use std::time::Duration;
+
+use criterion::{Criterion, SamplingMode, criterion_group, criterion_main};
+use fathom_sim::experiments::single_run::SingleRun;
+use fathom_sim::montecarlo::{run_monte_carlo, run_rng};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn one_run_each(c: &mut Criterion) {
+    let mut g = c.benchmark_group("mc_run");
+    g.sample_size(10)
+        .sampling_mode(SamplingMode::Flat)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(3));
+    for name in ["fusion", "noise", "beacons", "vkf"] {
+        let run = SingleRun::prepare(name, &root()).unwrap();
+        let mut i = 0usize;
+        g.bench_function(name, |b| {
+            b.iter(|| {
+                // a different run stream each time, as in a batch
+                let mut rng = run_rng(1, i);
+                i += 1;
+                run.run(black_box(&mut rng)).unwrap();
+            })
+        });
+    }
+    g.finish();
+}
+
+/// Monte Carlo batch of 8 `beacons` runs on 1 and on 2 threads: the speed-up is the
+/// ratio of the two times (`cargo xtask bench` prints it).
+fn thread_scaling(c: &mut Criterion) {
+    let run = SingleRun::prepare("beacons", &root()).unwrap();
+    let mut g = c.benchmark_group("mc_batch8_beacons");
+    g.sample_size(10)
+        .sampling_mode(SamplingMode::Flat)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(5));
+    for threads in [1usize, 2] {
+        g.bench_function(format!("threads_{threads}"), |b| {
+            b.iter(|| {
+                let out = run_monte_carlo(8, 7, Some(threads), |_, rng| run.run(rng).is_ok());
+                assert!(out.iter().all(|&ok| ok));
+            })
+        });
+    }
+    g.finish();
+}
+
+criterion_group!(benches, one_run_each, thread_scaling);
+criterion_main!(benches);
