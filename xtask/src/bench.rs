@@ -60,7 +60,7 @@ pub fn run(root: &Path, compare: bool, filter: Option<&str>) -> Result<()> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
     cmd.current_dir(root)
-        .args(["bench", "--workspace", "--benches", "--"]);
+        .args(["bench", "--workspace", "--bench", "*", "--"]);
     if let Some(f) = filter {
         cmd.arg(f);
     }
