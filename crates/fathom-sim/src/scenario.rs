@@ -222,6 +222,26 @@ pub fn to_toml<T: serde::Serialize>(value: &T, file: &str) -> Result<String, Sim
         .map_err(|e| SimError::invalid_argument(format!("scenario `{file}`"), e.to_string()))
 }
 
+/// Parses a scenario text, validates it with `check` and returns it re-serialized
+/// as TOML with every default filled in: what `fathom check` prints. Every
+/// experiment's `check_scenario_text` is this with its own schema and check.
+///
+/// # Errors
+/// [`SimError::Toml`] from parsing, whatever `check` returns, or the error of
+/// [`to_toml`].
+pub fn resolve_scenario_text<T, C>(
+    text: &str,
+    file: &str,
+    check: impl FnOnce(&T, &str) -> Result<C, SimError>,
+) -> Result<String, SimError>
+where
+    T: DeserializeOwned + serde::Serialize,
+{
+    let scenario: T = parse_toml(text, file)?;
+    check(&scenario, file)?;
+    to_toml(&scenario, file)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

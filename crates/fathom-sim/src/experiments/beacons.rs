@@ -1556,9 +1556,7 @@ fn report_section(
 /// # Errors
 /// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
 pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
-    let scenario: BeaconsScenario = crate::scenario::parse_toml(text, file)?;
-    scenario.check(file, None)?;
-    crate::scenario::to_toml(&scenario, file)
+    crate::scenario::resolve_scenario_text(text, file, |s: &BeaconsScenario, f| s.check(f, None))
 }
 
 /// One Monte Carlo run (every case and scheme) on the default scenario (for the

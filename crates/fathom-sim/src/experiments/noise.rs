@@ -814,9 +814,7 @@ fn interpretation(block_spread_notes: &[String]) -> String {
 /// # Errors
 /// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
 pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
-    let scenario: NoiseScenario = crate::scenario::parse_toml(text, file)?;
-    scenario.check(file, None)?;
-    crate::scenario::to_toml(&scenario, file)
+    crate::scenario::resolve_scenario_text(text, file, |s: &NoiseScenario, f| s.check(f, None))
 }
 
 /// One Monte Carlo run (every case) on the default scenario (for the benchmarks,

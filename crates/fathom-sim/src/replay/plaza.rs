@@ -1066,9 +1066,7 @@ pub fn replay(log: &PlazaLog, settings: &PlazaSettings) -> Result<PlazaReplay, S
 /// # Errors
 /// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
 pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
-    let scenario: PlazaToml = crate::scenario::parse_toml(text, file)?;
-    scenario.check(file)?;
-    crate::scenario::to_toml(&scenario, file)
+    crate::scenario::resolve_scenario_text(text, file, |s: &PlazaToml, f| s.check(f))
 }
 
 #[cfg(test)]

@@ -769,9 +769,7 @@ fn claims(setup: &FusionSetup, results: &[RunResult]) -> Result<Vec<Claim>, SimE
 /// # Errors
 /// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
 pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
-    let scenario: FusionScenario = crate::scenario::parse_toml(text, file)?;
-    scenario.check(file, None)?;
-    crate::scenario::to_toml(&scenario, file)
+    crate::scenario::resolve_scenario_text(text, file, |s: &FusionScenario, f| s.check(f, None))
 }
 
 /// One Monte Carlo run of every method on the default scenario (for the benchmarks,

@@ -540,9 +540,7 @@ impl VkfScenario {
 /// # Errors
 /// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
 pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
-    let scenario: VkfScenario = crate::scenario::parse_toml(text, file)?;
-    scenario.check(file, None)?;
-    crate::scenario::to_toml(&scenario, file)
+    crate::scenario::resolve_scenario_text(text, file, |s: &VkfScenario, f| s.check(f, None))
 }
 
 #[cfg(test)]
