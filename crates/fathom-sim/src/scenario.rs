@@ -38,7 +38,15 @@ pub fn parse_toml<T: DeserializeOwned>(text: &str, file_label: &str) -> Result<T
 
 /// Convert a `toml` deserialization error into a [`SimError::Toml`].
 fn toml_error(err: &toml::de::Error, text: &str, file_label: &str) -> SimError {
-    let span = err.span();
+    let message = err.message().trim().to_string();
+    let table_keys = keys_from_error(err);
+    // A missing field's span is its whole enclosing table: at the top level that is the
+    // whole file, so a line number would only point at line 1; inside a table it is the
+    // table's header, which is worth printing.
+    let missing = missing_field_name(&message);
+    let span = err
+        .span()
+        .filter(|_| !(missing.is_some() && table_keys.is_none()));
     let (line, column) = match &span {
         Some(s) => {
             let (l, c) = line_col(text, s.start);
@@ -46,11 +54,13 @@ fn toml_error(err: &toml::de::Error, text: &str, file_label: &str) -> SimError {
         }
         None => (None, None),
     };
-    let message = err.message().trim().to_string();
-    let key_path = match (keys_from_error(err), unknown_field_name(&message)) {
-        // The deserializer records the enclosing table for an unknown field; add the field.
+    let field = unknown_field_name(&message).or_else(|| missing.clone());
+    let key_path = match (table_keys, field) {
+        // The deserializer records the enclosing table for an unknown or missing field;
+        // add the field.
         (Some(table), Some(field)) if !table.ends_with(&field) => Some(format!("{table}.{field}")),
         (Some(keys), _) => Some(keys),
+        (None, Some(field)) if missing.is_some() => Some(field),
         (None, _) => span
             .as_ref()
             .and_then(|s| key_path_at(text, s.start, &message)),
@@ -128,6 +138,12 @@ fn key_path_at(text: &str, offset: usize, message: &str) -> Option<String> {
         (false, None) => Some(table),
         (true, None) => None,
     }
+}
+
+fn missing_field_name(message: &str) -> Option<String> {
+    let rest = message.strip_prefix("missing field `")?;
+    let end = rest.find('`')?;
+    Some(rest[..end].to_string())
 }
 
 fn unknown_field_name(message: &str) -> Option<String> {
@@ -305,8 +321,20 @@ mod tests {
         println!("{s}");
         assert!(s.starts_with("demo.toml"), "{s}");
         assert!(s.contains("missing field `runs`"), "{s}");
-        assert!(s.contains("`noise`"), "{s}");
+        assert!(s.contains("key `noise.runs`"), "{s}");
         assert!(s.contains("line 2"), "{s}");
+    }
+
+    #[test]
+    fn missing_top_level_field_names_the_field_not_line_one() {
+        // Before: the key path was taken from whatever stood on line 1 (`name`).
+        let (e, s) = err_text("name = \"a\"\n");
+        println!("{s}");
+        assert!(
+            s.starts_with("demo.toml: key `noise`: missing field `noise`"),
+            "{s}"
+        );
+        assert!(matches!(e, SimError::Toml { line: None, .. }), "{e:?}");
     }
 
     #[test]

@@ -287,6 +287,7 @@ pub struct Checked {
 
 /// An integer ratio `a / b` (both rates in Hz), or an error naming `key`.
 fn integer_ratio(file: &str, key: &str, a: f64, b: f64) -> Result<usize, SimError> {
+    require_positive(file, key, b)?;
     let r = a / b;
     if (r - r.round()).abs() > 1e-9 || r.round() < 1.0 {
         return Err(SimError::invalid(
