@@ -124,10 +124,10 @@ fn parse_doc(doc: &str) -> Result<DocSections, Vec<String>> {
                 .strip_prefix('`')
                 .and_then(|t| t.split_once('`'))
                 .map(|(name, _)| name.to_string());
-            if let Some(name) = &section {
-                if sections.insert(name.clone(), Vec::new()).is_some() {
-                    errors.push(format!("line {line_no}: second section for `{name}`"));
-                }
+            if let Some(name) = &section
+                && sections.insert(name.clone(), Vec::new()).is_some()
+            {
+                errors.push(format!("line {line_no}: second section for `{name}`"));
             }
             continue;
         }
@@ -412,15 +412,15 @@ fn check_docs(doc: &str, presets: &[Preset<'_>]) -> Vec<String> {
                 ));
                 continue;
             }
-            if let Some(types) = leaves.get(key) {
-                if types.iter().any(|t| *t != row.ty) {
-                    problems.push(format!(
-                        "{exp}: line {}: key `{key}` is documented as {} but resolves to {}",
-                        row.line,
-                        row.ty,
-                        types.iter().copied().collect::<Vec<_>>().join(", ")
-                    ));
-                }
+            if let Some(types) = leaves.get(key)
+                && types.iter().any(|t| *t != row.ty)
+            {
+                problems.push(format!(
+                    "{exp}: line {}: key `{key}` is documented as {} but resolves to {}",
+                    row.line,
+                    row.ty,
+                    types.iter().copied().collect::<Vec<_>>().join(", ")
+                ));
             }
             check_default(exp, row, &base, p.resolve, &mut problems);
         }
