@@ -52,6 +52,8 @@ pub mod output;
 pub mod plot;
 pub mod replay;
 pub mod scenario;
+#[cfg(test)]
+mod scenario_docs;
 pub mod user_run;
 
 pub use error::SimError;

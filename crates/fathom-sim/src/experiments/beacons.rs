@@ -127,7 +127,8 @@ pub struct TimingToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct NoiseToml {
-    /// DVL `(u, v, w)` and AHRS `(p, q, r)` noise sigmas.
+    /// DVL `(u, v, w)` (m/s) and AHRS `(p, q, r)` (rad/s) noise sigmas. The 4-state
+    /// filter uses `u, v, w` and `r`; `p` and `q` only enter the simulated AHRS data.
     pub velocity_sigma: [f64; 6],
     /// White range noise sigma, m.
     pub range_sigma_m: f64,
@@ -135,7 +136,8 @@ pub struct NoiseToml {
     pub depth_sigma_m: f64,
     /// Hold time of the common-mode range noise, s.
     pub corr_gap_s: f64,
-    /// Number of injected range outliers.
+    /// Number of injected range outliers (over all beacons; at most the run's range
+    /// samples, which is only checked when the data are generated).
     pub outlier_count: usize,
     /// Outlier magnitude, m.
     pub outlier_magnitude_m: f64,
@@ -145,11 +147,14 @@ pub struct NoiseToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct EkfToml {
-    /// SC/SI epoch period, s.
+    /// SC/SI epoch period, s; also the period at which every scheme's error is
+    /// evaluated.
     pub epoch_period_s: f64,
-    /// Gate distance `d` (reject when `nu^2 / S > d^2`).
+    /// Gate distance `d` (reject a range when `nu^2 / S > d^2`, eq. 10); depth is never
+    /// gated.
     pub gate_sigma: f64,
-    /// AS stale tolerance, s.
+    /// AS stale tolerance, s: a measurement stamped up to this much before the filter
+    /// time is still applied (at the filter time), older ones are dropped.
     pub stale_tolerance_s: f64,
     /// Initial position sigma, m.
     pub init_pos_sigma_m: f64,
@@ -165,7 +170,8 @@ pub struct EkfToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct FiguresToml {
-    /// Monte Carlo run shown in the single-run figures.
+    /// Monte Carlo run shown in the single-run figures; must be below `runs` (or
+    /// `--runs` when given).
     pub run: usize,
 }
 
@@ -183,7 +189,8 @@ pub enum TimingKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CaseToml {
-    /// Case name (`high`, `low`, `none`, `sync`).
+    /// Case name (`high`, `low`, `none`, `sync`). One case must be `high` (Table 13's
+    /// main case); a `low` case adds the claim `sc_advantage_shrinks_low_corr`.
     pub name: String,
     /// Sensor timing.
     pub timing: TimingKind,

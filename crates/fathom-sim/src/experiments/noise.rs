@@ -79,7 +79,7 @@ pub struct NoiseScenario {
 pub struct TimingToml {
     /// Common sample period, s.
     pub period_s: f64,
-    /// Sample-time jitter sigma, s.
+    /// Sample-time jitter sigma, s (< `period_s` / 4).
     pub jitter_sigma_s: f64,
 }
 
@@ -111,7 +111,8 @@ pub struct LongRunToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CaseToml {
-    /// Case name (`gaussian`, `corr_high`, ...).
+    /// Case name. `gaussian`, `corr_high`, `corr_low`, `both_high` and `both_low` get
+    /// the paper's matrices (eqs. 5-9) as reference; other names have none.
     pub name: String,
     /// White Gaussian range and depth noise on/off.
     pub gaussian: bool,

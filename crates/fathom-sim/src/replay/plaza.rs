@@ -74,8 +74,10 @@ pub struct PlazaToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DataToml {
-    /// Data folder for `cargo xtask paper`, looked up beside the workspace root and its
-    /// ancestors.
+    /// Data folder for `cargo xtask paper` and `fathom run`: an absolute path, or a
+    /// relative one looked up beside (not inside) the workspace root (for `fathom run`
+    /// the current directory) and beside each of its ancestors. `fathom replay plaza
+    /// <dir>` ignores it.
     pub dir: String,
     /// `"sort"` or `"strict"` ([`RangeOrder`]).
     pub range_order: String,
@@ -109,7 +111,9 @@ pub struct OdometryToml {
 pub struct RangesToml {
     /// White range noise sigma, m.
     pub sigma_m: f64,
-    /// Common-mode correlation sigma between beacons (SC's off-diagonal R), m.
+    /// Common-mode correlation sigma between beacons, m: SC's off-diagonal R, and
+    /// added to every range's variance (`sigma_m^2 + correlation_sigma_m^2`) in all
+    /// schemes.
     pub correlation_sigma_m: f64,
     /// `"none"`, `"offset"` or `"affine"` ([`Calibration`]).
     pub calibration: String,

@@ -53,7 +53,9 @@ pub struct FusionScenario {
     pub runs: usize,
     /// Base seed; run `i` uses ChaCha stream `i`.
     pub base_seed: u64,
-    /// Seed of the mission's knot perturbations (fixed across runs).
+    /// Seed of the mission's knot perturbations (fixed across runs). The generated
+    /// mission must pass its self-checks (speeds, depth, course changes); that is
+    /// only checked when running, not by `fathom check`.
     pub trajectory_seed: u64,
     /// The mission.
     pub mission: MissionToml,
@@ -111,7 +113,8 @@ pub struct InsToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DvlToml {
-    /// Half width of the per-axis scale-factor error `U(-h, h)`.
+    /// Half width `h` of the per-axis scale-factor error `U(-h, h)`, drawn per run; a
+    /// fraction (0.002 = 0.2 %).
     pub scale_half_width: f64,
     /// Per-axis white velocity noise std, m/s.
     pub vel_noise_sigma_mps: f64,

@@ -74,7 +74,7 @@ pub struct RouteToml {
     pub accel_duration_s: f64,
     /// Mission duration, s.
     pub duration_s: f64,
-    /// IMU / computation rate, Hz.
+    /// IMU / computation rate, Hz (a whole number: errors are recorded every 1 s).
     pub imu_rate_hz: f64,
     /// Coordinated turns.
     pub turns: Vec<TurnToml>,
@@ -150,11 +150,13 @@ impl ImuToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DvlToml {
-    /// Output rate, Hz (must divide the IMU rate).
+    /// Output rate, Hz: a whole number that divides the IMU rate. The echo sounder,
+    /// RPM and depth gauge sample at the same epochs, where the filters update.
     pub rate_hz: f64,
     /// Bottom-lock range, m.
     pub range_m: f64,
-    /// Half width of the uniform scale-factor error.
+    /// Half width of the uniform scale-factor error, a fraction (0.002 = 0.2 %), drawn
+    /// per run and common to the axes.
     pub scale_factor_half_width: f64,
     /// Half width of the uniform bias per axis, m/s (the paper reading, 0.005).
     pub bias_half_width_mps: f64,
@@ -182,7 +184,7 @@ pub struct RpmToml {
     pub k_mps_per_rpm: f64,
     /// True speed offset, m/s.
     pub b_mps: f64,
-    /// Revolution noise sigma, rpm.
+    /// Revolution noise sigma, rpm (the VKF assumes the same value).
     pub sigma_rpm: f64,
 }
 
@@ -190,7 +192,7 @@ pub struct RpmToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct DepthGaugeToml {
-    /// Noise sigma, m.
+    /// Noise sigma, m; also the depth measurement sigma of every filter.
     pub sigma_m: f64,
 }
 
@@ -204,11 +206,11 @@ pub struct VkfToml {
     pub b0: f64,
     /// Initial speed sigma, m/s.
     pub sigma_speed0_mps: f64,
-    /// Initial scale-factor sigma.
+    /// Initial scale-factor sigma, m/s per rpm.
     pub sigma_sf0: f64,
     /// Initial bias sigma, m/s.
     pub sigma_b0_mps: f64,
-    /// Extra forward-speed process noise sigma per VKF step, m/s.
+    /// Extra forward-speed process noise sigma per VKF step (one per DVL epoch), m/s.
     pub speed_process_sigma_mps: f64,
     /// Scale-factor random-walk PSD, (m/s/rpm)^2/s.
     pub sf_rw_psd: f64,
@@ -230,15 +232,15 @@ pub struct NavFilterToml {
     pub accel_psd: f64,
     /// Accelerometer-bias random-walk PSD of the 9-state filter, (m/s^2)^2/s.
     pub accel_bias_rw_psd: f64,
-    /// Initial position sigma, m.
+    /// Initial position sigma of the 9-state filters and the ESKF, m.
     pub sigma0_pos_m: f64,
-    /// Initial velocity sigma, m/s.
+    /// Initial velocity sigma of the 9-state filters and the ESKF, m/s.
     pub sigma0_vel_mps: f64,
     /// Initial accelerometer-bias sigma of the 9-state filter, m/s^2.
     pub sigma0_accel_bias_mps2: f64,
     /// Frame of the 9-state filter's acceleration bias: `"body"` or `"nav"`.
     pub accel_bias_frame: String,
-    /// DVL velocity sigma assumed by the filters, m/s.
+    /// DVL velocity sigma assumed by the 9-state filters and the ESKF, m/s.
     pub dvl_sigma_mps: f64,
     /// Gate probability of `INS-DVL-gated` (chi-square, 3 dof).
     pub gate_probability: f64,
