@@ -3,8 +3,9 @@
 //! ablations ([`crate::replay::plaza`]).
 //!
 //! The data is not part of the repository. The folder named by `[data] dir` in
-//! `scenarios/plaza.toml` (default `shared/data/plaza1`) is looked up beside the
-//! workspace root and beside each of its ancestors, so a checkout next to `shared/`
+//! `scenarios/plaza.toml` (default `shared/data/plaza1`) is looked up inside the
+//! workspace root (or the current directory for `fathom run`) and beside each of its
+//! ancestors, so a checkout next to `shared/`
 //! finds `../shared/data/plaza1`. When it is absent the experiment is **skipped**: it
 //! prints a message, returns a summary without rows (`runs = 0`) and a report saying
 //! why, and `cargo xtask paper` does not fail.
@@ -26,8 +27,9 @@ pub const EXPERIMENT: Experiment = Experiment {
     run,
 };
 
-/// The data folder `dir` beside `workspace_root` or one of its ancestors (an absolute
-/// `dir` is used as it is), if it exists.
+/// The data folder `dir` inside `workspace_root` (for `fathom run`, the current
+/// directory) or beside one of its ancestors, the nearest first (an absolute `dir` is
+/// used as it is), if it exists.
 pub fn find_data_dir(workspace_root: &Path, dir: &str) -> Option<PathBuf> {
     let rel = Path::new(dir);
     if rel.is_absolute() {
@@ -35,7 +37,6 @@ pub fn find_data_dir(workspace_root: &Path, dir: &str) -> Option<PathBuf> {
     }
     workspace_root
         .ancestors()
-        .skip(1)
         .map(|a| a.join(rel))
         .find(|p| p.is_dir())
 }
@@ -46,7 +47,7 @@ fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
     let settings = parse_settings(&text, &ctx.scenario_label)?;
     let Some(dir) = find_data_dir(&ctx.workspace_root, &settings.data_dir) else {
         let msg = format!(
-            "data folder `{}` not found beside `{}` or any of its ancestors",
+            "data folder `{}` not found in `{}` or beside any of its ancestors",
             settings.data_dir,
             ctx.workspace_root.display()
         );
@@ -81,7 +82,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn data_dir_is_found_beside_an_ancestor_only() {
+    fn data_dir_is_found_inside_the_root_or_beside_an_ancestor_nearest_first() {
         let base = std::env::temp_dir()
             .join("fathom-sim-tests")
             .join(format!("plaza-find-{}", std::process::id()));
@@ -94,9 +95,15 @@ mod tests {
             find_data_dir(&root, "shared/data/x"),
             Some(base.join("shared/data/x"))
         );
-        // Inside the repository does not count.
+        // Inside the root (a user's `data/` next to their scenario) counts, and wins
+        // over the same name further up.
         std::fs::create_dir_all(root.join("inside")).unwrap();
-        assert_eq!(find_data_dir(&root, "inside"), None);
+        assert_eq!(find_data_dir(&root, "inside"), Some(root.join("inside")));
+        std::fs::create_dir_all(root.join("shared/data/x")).unwrap();
+        assert_eq!(
+            find_data_dir(&root, "shared/data/x"),
+            Some(root.join("shared/data/x"))
+        );
         let abs = base.join("shared/data/x");
         assert_eq!(find_data_dir(&root, abs.to_str().unwrap()), Some(abs));
     }

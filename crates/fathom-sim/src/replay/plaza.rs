@@ -75,8 +75,8 @@ pub struct PlazaToml {
 #[serde(deny_unknown_fields)]
 pub struct DataToml {
     /// Data folder for `cargo xtask paper` and `fathom run`: an absolute path, or a
-    /// relative one looked up beside (not inside) the workspace root (for `fathom run`
-    /// the current directory) and beside each of its ancestors. `fathom replay plaza
+    /// relative one looked up inside the workspace root (for `fathom run` the current
+    /// directory), then beside each of its ancestors, nearest first. `fathom replay plaza
     /// <dir>` ignores it.
     pub dir: String,
     /// `"sort"` or `"strict"` ([`RangeOrder`]).
