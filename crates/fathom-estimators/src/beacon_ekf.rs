@@ -453,6 +453,42 @@ mod tests {
         }
     }
 
+    /// With robust handling, dropped non-finite samples are not rejections: a long
+    /// run of them never triggers a lock-out recovery, and the estimate is as if
+    /// they never arrived. Negative control: as many real 50-sigma outliers do.
+    #[test]
+    fn robust_lockout_ignores_non_finite_samples() {
+        use crate::robust::{RecoveryParams, RobustParams};
+        let policy = RobustParams {
+            huber_k: Some(2.0),
+            recovery: Some(RecoveryParams {
+                after_rejections: 3,
+                inflation: 4.0,
+            }),
+        }
+        .check()
+        .unwrap();
+        let robust = |scheme| scheme_filter(scheme, 0.0).with_robust(policy);
+        for scheme in UpdateScheme::ALL {
+            let (mut dirty, mut clean, mut outliers) =
+                (robust(scheme), robust(scheme), robust(scheme));
+            for k in 0..6 {
+                let t = 0.1 * (k + 1) as f64;
+                let stamp = t - 0.003;
+                dirty.process(bad(0, stamp, f64::NAN, k)).unwrap();
+                outliers.process(bad(0, stamp, 1e3, k)).unwrap();
+                for f in [&mut dirty, &mut clean, &mut outliers] {
+                    f.advance_to(t).unwrap();
+                }
+            }
+            assert_eq!(dirty.recoveries(), 0, "{scheme:?}");
+            assert_eq!(dirty.counts()[0].non_finite, 6);
+            assert_eq!(dirty.counts()[0].rejected, 0);
+            assert_eq!(dirty.ekf().covariance(), clean.ekf().covariance());
+            assert!(outliers.recoveries() >= 1, "{scheme:?}");
+        }
+    }
+
     /// A non-finite input sample or input stamp is dropped and counted; the held
     /// input and the prediction are as if it never arrived.
     #[test]

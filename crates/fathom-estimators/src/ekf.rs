@@ -605,6 +605,11 @@ mod tests {
         assert_eq!(f, before);
         f.try_apply_input(&2.0).unwrap();
         assert_eq!(*f.input(), 2.0);
+        let e = f.predict_to(f64::NAN).unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { time, .. } if *time == 0.5),
+            "{e}"
+        );
         f.apply_input(&f64::INFINITY);
         let held = f.clone();
         let e = f.predict_to(0.75).unwrap_err();
