@@ -9,6 +9,7 @@ mod support;
 mod beacons;
 mod cli;
 mod fusion;
+mod hardening;
 mod noise;
 mod plaza;
 mod vkf;

@@ -73,7 +73,14 @@ impl DvlAhrsMotionParams {
     }
 }
 
+/// The quantity named in errors about the held input.
+const INPUT_NAME: &str = "DVL/AHRS input (u, v, w, r)";
+
 /// Dead reckoning from DVL velocity and AHRS yaw rate (module docs).
+///
+/// Bad input: a non-finite held input is an error of the next prediction naming the
+/// component (index 0..3 = `u, v, w`, 3 = `r`) at its target time; under a
+/// [`crate::schemes::SchemeFilter`] such samples are dropped and counted instead.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DvlAhrsMotion {
     vel_psd: Vector3<f64>,
@@ -121,6 +128,18 @@ impl MotionModel<4> for DvlAhrsMotion {
         }
     }
 
+    /// Index `0..3` = DVL `(u, v, w)`, `3` = AHRS yaw rate `r` (as in [`Self::propagate`]).
+    fn non_finite_in_sample(&self, sample: &DvlAhrsSample) -> Option<(&'static str, usize, f64)> {
+        let (offset, values): (usize, &[f64]) = match sample {
+            DvlAhrsSample::Velocity(v) => (0, v.as_slice()),
+            DvlAhrsSample::YawRate(r) => (3, std::slice::from_ref(r)),
+        };
+        values
+            .iter()
+            .position(|v| !v.is_finite())
+            .map(|i| (INPUT_NAME, offset + i, values[i]))
+    }
+
     fn propagate(
         &self,
         x: &Vector4<f64>,
@@ -128,12 +147,21 @@ impl MotionModel<4> for DvlAhrsMotion {
         dt: f64,
     ) -> Result<Propagation<4>, EstimatorError> {
         let (vb, r) = (input.vel_in_body, input.yaw_rate);
-        if !(vb.iter().all(|v| v.is_finite()) && r.is_finite() && dt.is_finite()) {
+        // The time stamp is set by `Ekf::predict_to` (the model does not know it).
+        if let Some(index) = (0..4).find(|&i| ![vb.x, vb.y, vb.z, r][i].is_finite()) {
             return Err(EstimatorError::NonFinite {
-                what: "DVL/AHRS input or step".into(),
+                what: INPUT_NAME.into(),
+                index,
+                value: [vb.x, vb.y, vb.z, r][index],
+                time: f64::NAN,
+            });
+        }
+        if !dt.is_finite() {
+            return Err(EstimatorError::NonFinite {
+                what: "DVL/AHRS prediction step dt".into(),
                 index: 0,
-                value: f64::NAN,
-                time: dt,
+                value: dt,
+                time: f64::NAN,
             });
         }
         let psi_m = x[3] + 0.5 * r * dt;
@@ -213,7 +241,7 @@ impl ScalarModel<4> for BeaconMeasurement {
 mod tests {
     use super::*;
     use crate::{
-        GateThreshold,
+        EstimatorError, GateThreshold,
         ekf::{Ekf, GroupItem},
         schemes::{Disposition, Event, Observation, SchemeFilter, SchemeParams, UpdateScheme},
     };
@@ -328,6 +356,216 @@ mod tests {
             .unwrap();
         }
         f.advance_to(to).unwrap();
+    }
+
+    fn bad(
+        channel: usize,
+        stamp: f64,
+        value: f64,
+        tag: usize,
+    ) -> Event<DvlAhrsSample, BeaconMeasurement> {
+        Event::Measurement(Observation {
+            channel,
+            stamp,
+            value,
+            model: model(channel),
+            tag,
+        })
+    }
+
+    /// Bad input (crate docs, "Bad input"): in every scheme a non-finite range or
+    /// depth value, or a non-finite stamp, is dropped, logged as
+    /// [`Disposition::NonFinite`], counted per channel and never applied: the
+    /// estimate equals the one without the bad samples, bit for bit.
+    #[test]
+    fn non_finite_measurements_are_dropped_and_counted() {
+        for scheme in UpdateScheme::ALL {
+            let z = z_at(0.1, OFFSETS);
+            let mut clean = scheme_filter(scheme, 0.2);
+            feed(&mut clean, 0.097, &z, 0.1);
+            let mut dirty = scheme_filter(scheme, 0.2);
+            for (c, &value) in z.iter().enumerate() {
+                dirty.process(bad(c, 0.097, value, c)).unwrap();
+            }
+            dirty.process(bad(0, 0.098, f64::NAN, 10)).unwrap();
+            dirty.process(bad(2, 0.099, f64::INFINITY, 12)).unwrap();
+            dirty.process(bad(1, f64::NAN, 20.0, 11)).unwrap();
+            dirty.process(bad(4, 0.099, f64::NEG_INFINITY, 14)).unwrap();
+            dirty.advance_to(0.1).unwrap();
+            assert_eq!(dirty.ekf().state(), clean.ekf().state(), "{scheme:?}");
+            assert_eq!(dirty.ekf().covariance(), clean.ekf().covariance());
+            let non_finite: Vec<usize> = dirty.counts().iter().map(|c| c.non_finite).collect();
+            assert_eq!(non_finite, [1, 1, 1, 0, 1], "{scheme:?}");
+            let dropped: Vec<usize> = dirty
+                .decisions()
+                .iter()
+                .filter(|d| d.disposition == Disposition::NonFinite)
+                .map(|d| d.tag)
+                .collect();
+            assert_eq!(dropped, [10, 12, 11, 14]);
+            assert_eq!(
+                dirty.counts()[0].accepted,
+                clean.counts()[0].accepted,
+                "{scheme:?}"
+            );
+            // Negative control: the clean filter saw none.
+            assert!(clean.counts().iter().all(|c| c.non_finite == 0));
+        }
+    }
+
+    proptest::proptest! {
+        #![proptest_config(proptest::prelude::ProptestConfig::with_cases(24))]
+        /// Whatever samples are replaced by NaN / +-inf, in any scheme, the dropped
+        /// count equals the number replaced and the estimate equals the one of a
+        /// filter that never received them.
+        #[test]
+        fn any_injected_non_finite_samples_are_dropped_exactly(
+            mask in proptest::collection::vec(0u8..4, 15),
+            scheme_index in 0usize..3,
+        ) {
+            let scheme = UpdateScheme::ALL[scheme_index];
+            let mut dirty = scheme_filter(scheme, 0.2);
+            let mut clean = scheme_filter(scheme, 0.2);
+            let mut injected = 0;
+            for k in 0..3 {
+                let t = 0.1 * (k + 1) as f64;
+                let z = z_at(t, OFFSETS);
+                for c in 0..5 {
+                    let event = bad(c, t - 0.003, z[c], 5 * k + c);
+                    let bad_value = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY];
+                    match mask[5 * k + c] {
+                        m @ 1..=3 => {
+                            injected += 1;
+                            dirty.process(bad(c, t - 0.003, bad_value[m as usize - 1], 5 * k + c)).unwrap();
+                        }
+                        _ => {
+                            dirty.process(event.clone()).unwrap();
+                            clean.process(event).unwrap();
+                        }
+                    }
+                }
+                dirty.advance_to(t).unwrap();
+                clean.advance_to(t).unwrap();
+            }
+            proptest::prop_assert_eq!(dirty.non_finite_measurements(), injected);
+            proptest::prop_assert_eq!(dirty.ekf().state(), clean.ekf().state());
+            proptest::prop_assert!(dirty.ekf().state().iter().all(|v| v.is_finite()));
+        }
+    }
+
+    /// With robust handling, dropped non-finite samples are not rejections: a long
+    /// run of them never triggers a lock-out recovery, and the estimate is as if
+    /// they never arrived. Negative control: as many real 50-sigma outliers do.
+    #[test]
+    fn robust_lockout_ignores_non_finite_samples() {
+        use crate::robust::{RecoveryParams, RobustParams};
+        let policy = RobustParams {
+            huber_k: Some(2.0),
+            recovery: Some(RecoveryParams {
+                after_rejections: 3,
+                inflation: 4.0,
+            }),
+        }
+        .check()
+        .unwrap();
+        let robust = |scheme| scheme_filter(scheme, 0.0).with_robust(policy);
+        for scheme in UpdateScheme::ALL {
+            let (mut dirty, mut clean, mut outliers) =
+                (robust(scheme), robust(scheme), robust(scheme));
+            for k in 0..6 {
+                let t = 0.1 * (k + 1) as f64;
+                let stamp = t - 0.003;
+                dirty.process(bad(0, stamp, f64::NAN, k)).unwrap();
+                outliers.process(bad(0, stamp, 1e3, k)).unwrap();
+                for f in [&mut dirty, &mut clean, &mut outliers] {
+                    f.advance_to(t).unwrap();
+                }
+            }
+            assert_eq!(dirty.recoveries(), 0, "{scheme:?}");
+            assert_eq!(dirty.counts()[0].non_finite, 6);
+            assert_eq!(dirty.counts()[0].rejected, 0);
+            assert_eq!(dirty.ekf().covariance(), clean.ekf().covariance());
+            assert!(outliers.recoveries() >= 1, "{scheme:?}");
+        }
+    }
+
+    /// A non-finite input sample or input stamp is dropped and counted; the held
+    /// input and the prediction are as if it never arrived.
+    #[test]
+    fn non_finite_inputs_are_dropped_and_counted() {
+        for scheme in UpdateScheme::ALL {
+            let mut f = scheme_filter(scheme, 0.0);
+            let mut g = f.clone();
+            let nan_vel = DvlAhrsSample::Velocity(Vector3::new(0.5, f64::NAN, 0.0));
+            for (stamp, sample) in [
+                (0.05, nan_vel),
+                (f64::NAN, DvlAhrsSample::YawRate(0.1)),
+                (0.06, DvlAhrsSample::YawRate(f64::INFINITY)),
+            ] {
+                f.process(Event::Input { stamp, sample }).unwrap();
+            }
+            assert_eq!(f.non_finite_inputs(), 3);
+            assert_eq!(g.non_finite_inputs(), 0);
+            f.advance_to(1.0).unwrap();
+            g.advance_to(1.0).unwrap();
+            assert_eq!(f.ekf().state(), g.ekf().state(), "{scheme:?}");
+            assert_eq!(f.ekf().input(), g.ekf().input());
+        }
+    }
+
+    /// A covariance that overflows (absurd prior and input) is an error at the time
+    /// of the failing prediction (the first epoch for SC/SI, the target for AS); the
+    /// filter keeps its last good estimate.
+    #[test]
+    fn covariance_overflow_is_an_error_with_the_time() {
+        for (scheme, t_fail) in [
+            (UpdateScheme::Asynchronous, 0.35),
+            (UpdateScheme::SynchronousCollective, 0.1),
+            (UpdateScheme::SynchronousIndividual, 0.1),
+        ] {
+            let x0 = Vector4::new(1.0, -0.5, 3.0, 0.3);
+            let prior = Gaussian::new(x0, Matrix4::identity() * 1e308).unwrap();
+            let input = DvlAhrsInput {
+                vel_in_body: Vector3::new(100.0, 0.0, 0.0),
+                yaw_rate: 0.0,
+            };
+            let ekf = Ekf::new(prior, 0.0, motion(), input).unwrap();
+            let config = scheme_filter(scheme, 0.0).config().clone();
+            let mut f: SchemeFilter<4, _, BeaconMeasurement> = SchemeFilter::new(ekf, config);
+            let e = f.advance_to(0.35).unwrap_err();
+            assert!(
+                e.to_string().contains("predicted covariance P"),
+                "{scheme:?}: {e}"
+            );
+            assert_eq!(e.time(), Some(t_fail), "{scheme:?}: {e}");
+            assert_eq!(f.ekf().time(), 0.0);
+            assert_eq!(*f.ekf().state(), x0);
+        }
+    }
+
+    /// The motion model names the non-finite input component; the EKF stamps the
+    /// error with the prediction's target time.
+    #[test]
+    fn motion_model_names_the_non_finite_input() {
+        let mut f = ekf();
+        let nan_w = DvlAhrsSample::Velocity(Vector3::new(0.5, 0.0, f64::NAN));
+        let e = f.try_apply_input(&nan_w).unwrap_err();
+        assert!(matches!(&e, EstimatorError::NonFinite { index: 2, time, .. } if *time == 0.0));
+        f.apply_input(&DvlAhrsSample::YawRate(f64::INFINITY));
+        let e = f.predict_to(0.4).unwrap_err();
+        match e {
+            EstimatorError::NonFinite {
+                what,
+                index,
+                value,
+                time,
+            } => {
+                assert!(what.contains("DVL/AHRS"), "{what}");
+                assert_eq!((index, value, time), (3, f64::INFINITY, 0.4));
+            }
+            other => panic!("unexpected {other}"),
+        }
+        assert_eq!(f.time(), 0.0);
     }
 
     #[test]

@@ -56,10 +56,24 @@ pub trait MotionModel<const N: usize> {
     /// Merges a received sample into the held input.
     fn apply_sample(&self, input: &mut Self::Input, sample: &Self::InputSample);
 
+    /// The first non-finite component of `sample` as `(quantity, index, value)`, or
+    /// `None` when the sample is finite. Used by [`Ekf::try_apply_input`] and by the
+    /// scheme filter, which drops and counts such samples
+    /// ([`crate::schemes::SchemeFilter::non_finite_inputs`]). The default checks
+    /// nothing (`None`); then a non-finite sample is caught by the next prediction.
+    fn non_finite_in_sample(
+        &self,
+        _sample: &Self::InputSample,
+    ) -> Option<(&'static str, usize, f64)> {
+        None
+    }
+
     /// Mean, Jacobian and process noise of a step of length `dt > 0` from `x`.
     ///
     /// # Errors
-    /// Model-specific (e.g. a non-finite input), as [`EstimatorError`].
+    /// Model-specific (e.g. a non-finite input), as [`EstimatorError`]; the model
+    /// does not know the filter time, [`Ekf::predict_to`] stamps the error with the
+    /// prediction's target time.
     fn propagate(
         &self,
         x: &SVector<f64, N>,
@@ -105,6 +119,11 @@ pub struct GroupItem<'a, S> {
 }
 
 /// An EKF: a [`KalmanFilter`] plus a motion model and the input it currently holds.
+///
+/// Bad input (crate docs, "Bad input"): a non-finite measurement, input sample or
+/// time is an error naming the quantity, the item index and the filter time; a
+/// covariance that stops being positive definite is an error with the time; the
+/// filter is unchanged on every error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ekf<const N: usize, M: MotionModel<N>> {
     kf: KalmanFilter<N>,
@@ -181,8 +200,31 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
     }
 
     /// Merges a received input sample (it drives the predictions from now on).
+    ///
+    /// Unchecked: a non-finite sample is held and makes every later prediction fail
+    /// (with an error naming the input, at the prediction's target time) until a
+    /// finite sample replaces it. [`Ekf::try_apply_input`] refuses it up front.
     pub fn apply_input(&mut self, sample: &M::InputSample) {
         self.model.apply_sample(&mut self.input, sample);
+    }
+
+    /// [`Ekf::apply_input`] after checking the sample
+    /// ([`MotionModel::non_finite_in_sample`]).
+    ///
+    /// # Errors
+    /// [`EstimatorError::NonFinite`] naming the quantity and component index, at the
+    /// filter time; the held input is unchanged.
+    pub fn try_apply_input(&mut self, sample: &M::InputSample) -> Result<(), EstimatorError> {
+        if let Some((what, index, value)) = self.model.non_finite_in_sample(sample) {
+            return Err(EstimatorError::NonFinite {
+                what: what.into(),
+                index,
+                value,
+                time: self.kf.time(),
+            });
+        }
+        self.apply_input(sample);
+        Ok(())
     }
 
     /// Predicts to `time` with the held input (nothing to do when `time` equals the
@@ -213,7 +255,8 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
         }
         let prop = self
             .model
-            .propagate(self.kf.state(), &self.input, time - now)?;
+            .propagate(self.kf.state(), &self.input, time - now)
+            .map_err(|e| e.at_time(time))?;
         let mut x = prop.x_pred;
         self.model.normalize(&mut x);
         self.kf
@@ -252,15 +295,18 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
         let x0 = *self.kf.state();
         let backup = self.kf.clone();
         let mut outcomes = Vec::with_capacity(items.len());
+        let t = self.kf.time();
         for (i, it) in items.iter().enumerate() {
             let res = self.linearize_at(i, it, &x0).and_then(|(h0, h_row)| {
                 let base = it.model.residual(it.value, h0);
+                check_item(i, base, &h_row, it.variance, t)?;
                 self.kf
                     .update_sequential_scalar_with(1, it.gate, |_, x| ScalarMeasurement {
                         innovation: base - (h_row * (x - x0))[0],
                         h_row,
                         variance: it.variance,
                     })
+                    .map_err(|e| reindex(e, i))
             });
             match res {
                 Ok(rep) => outcomes.extend(rep.outcomes),
@@ -392,6 +438,61 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
     }
 }
 
+/// Checks item `i` of a sequential group before the core update, so the error names
+/// the item index (the core sees one scalar at a time, index 0).
+fn check_item<const N: usize>(
+    i: usize,
+    innovation: f64,
+    h_row: &RowSVector<f64, N>,
+    variance: f64,
+    time: Time,
+) -> Result<(), EstimatorError> {
+    if !innovation.is_finite() {
+        return Err(EstimatorError::NonFinite {
+            what: "innovation nu".into(),
+            index: i,
+            value: innovation,
+            time,
+        });
+    }
+    check_finite_entries(
+        &format!("measurement row H[{i}]"),
+        1,
+        N,
+        |_, c| h_row[c],
+        time,
+    )?;
+    if !(variance.is_finite() && variance > 0.0) {
+        return Err(EstimatorError::NotPositiveDefinite {
+            what: format!("measurement variance r[{i}] = {variance}"),
+            time,
+        });
+    }
+    Ok(())
+}
+
+/// Renames the core's single-scalar index `[0]` to the group index `i`.
+fn reindex(e: EstimatorError, i: usize) -> EstimatorError {
+    match e {
+        EstimatorError::NotPositiveDefinite { what, time } => EstimatorError::NotPositiveDefinite {
+            what: what.replace("[0]", &format!("[{i}]")),
+            time,
+        },
+        EstimatorError::NonFinite {
+            what,
+            index,
+            value,
+            time,
+        } => EstimatorError::NonFinite {
+            what: what.replace("[0]", &format!("[{i}]")),
+            index,
+            value,
+            time,
+        },
+        other => other,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -408,6 +509,9 @@ mod tests {
         type InputSample = f64;
         fn apply_sample(&self, input: &mut f64, sample: &f64) {
             *input = *sample;
+        }
+        fn non_finite_in_sample(&self, sample: &f64) -> Option<(&'static str, usize, f64)> {
+            (!sample.is_finite()).then_some(("velocity input u", 0, *sample))
         }
         fn propagate(
             &self,
@@ -437,6 +541,95 @@ mod tests {
                 Obs::Position => (x[0], RowVector2::new(1.0, 0.0)),
             })
         }
+    }
+
+    /// Bad input (crate docs, "Bad input"): per-item errors name the item index and
+    /// the filter time, and leave the filter unchanged.
+    #[test]
+    fn group_errors_name_the_item_index_and_the_time() {
+        let mut f = ekf();
+        f.predict_to(0.5).unwrap();
+        let before = f.clone();
+        let ok = GroupItem {
+            value: 1.0,
+            model: &Obs::Position,
+            variance: 0.1,
+            gate: None,
+        };
+        let e = f
+            .update_sequential(&[
+                ok,
+                ok,
+                GroupItem {
+                    variance: -0.1,
+                    ..ok
+                },
+            ])
+            .unwrap_err();
+        match &e {
+            EstimatorError::NotPositiveDefinite { what, time } => {
+                assert!(what.contains("[2]"), "{what}");
+                assert_eq!(*time, 0.5);
+            }
+            other => panic!("unexpected {other}"),
+        }
+        assert_eq!(f, before);
+        let r = DMatrix::identity(2, 2) * 0.1;
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let items = [ok, GroupItem { value: bad, ..ok }];
+            for e in [
+                f.update_sequential(&items).unwrap_err(),
+                f.update_stacked(&items, &r).unwrap_err(),
+            ] {
+                assert!(
+                    matches!(&e, EstimatorError::NonFinite { index: 1, time, .. } if *time == 0.5),
+                    "{e}"
+                );
+            }
+            assert_eq!(f, before);
+        }
+    }
+
+    /// A non-finite input sample is refused by `try_apply_input`; an unchecked one is
+    /// caught by the next prediction, stamped with its target time.
+    #[test]
+    fn non_finite_inputs_are_errors_with_the_time() {
+        let mut f = ekf();
+        f.predict_to(0.5).unwrap();
+        let before = f.clone();
+        let e = f.try_apply_input(&f64::NAN).unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { index: 0, time, .. } if *time == 0.5),
+            "{e}"
+        );
+        assert_eq!(f, before);
+        f.try_apply_input(&2.0).unwrap();
+        assert_eq!(*f.input(), 2.0);
+        let e = f.predict_to(f64::NAN).unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { time, .. } if *time == 0.5),
+            "{e}"
+        );
+        f.apply_input(&f64::INFINITY);
+        let held = f.clone();
+        let e = f.predict_to(0.75).unwrap_err();
+        assert_eq!(e.time(), Some(0.75), "{e}");
+        assert_eq!(f, held);
+    }
+
+    /// A covariance that overflows in the prediction (loses positive definiteness) is
+    /// reported at the target time and never committed.
+    #[test]
+    fn covariance_overflow_is_an_error_at_the_target_time() {
+        let prior = Gaussian::new(Vector2::new(1.0, 0.0), Matrix2::identity() * 1e308).unwrap();
+        let mut f = Ekf::new(prior, 0.0, BiasedOdometry, 1.0).unwrap();
+        let before = f.clone();
+        let e = f.predict_to(1.0).unwrap_err();
+        // Overflow shows as a non-finite (or not positive definite) predicted P.
+        assert!(e.to_string().contains("predicted covariance P"), "{e}");
+        assert_eq!(e.time(), Some(1.0), "{e}");
+        assert!(e.to_string().contains("t = 1 s"), "{e}");
+        assert_eq!(f, before);
     }
 
     fn ekf() -> Ekf<2, BiasedOdometry> {

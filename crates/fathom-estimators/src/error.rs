@@ -84,6 +84,51 @@ pub enum EstimatorError {
 }
 
 impl EstimatorError {
+    /// The filter time stamp the error carries (`None` for the variants without
+    /// one: dimension, range and time-free [`EstimatorError::Core`] errors; for
+    /// [`EstimatorError::TimeBackwards`] the requested time).
+    pub fn time(&self) -> Option<Time> {
+        match self {
+            Self::NonFinite { time, .. }
+            | Self::NotSymmetric { time, .. }
+            | Self::NotPositiveDefinite { time, .. } => Some(*time),
+            Self::TimeBackwards { next, .. } => Some(*next),
+            _ => None,
+        }
+    }
+
+    /// The same error stamped with the filter time `time` (variants that carry a
+    /// time stamp; others unchanged). Used for errors raised by models that do not
+    /// know the filter time (e.g. [`crate::ekf::MotionModel::propagate`]).
+    pub fn at_time(self, time: Time) -> Self {
+        match self {
+            Self::NonFinite {
+                what, index, value, ..
+            } => Self::NonFinite {
+                what,
+                index,
+                value,
+                time,
+            },
+            Self::NotSymmetric {
+                what,
+                row,
+                col,
+                diff,
+                ..
+            } => Self::NotSymmetric {
+                what,
+                row,
+                col,
+                diff,
+                time,
+            },
+            Self::NotPositiveDefinite { what, .. } => Self::NotPositiveDefinite { what, time },
+            Self::Core(core) => Self::from_core_at(core, time),
+            other => other,
+        }
+    }
+
     /// Converts a [`CoreError`] from a check done inside a filter step into the
     /// corresponding variant carrying the filter time `time`.
     pub fn from_core_at(err: CoreError, time: Time) -> Self {
@@ -166,6 +211,28 @@ mod tests {
             }
         );
         assert!(e.to_string().contains("t = 12.5 s"));
+    }
+
+    #[test]
+    fn model_errors_are_stamped_with_the_filter_time() {
+        let e = EstimatorError::NonFinite {
+            what: "input".into(),
+            index: 2,
+            value: f64::NAN,
+            time: 0.1,
+        }
+        .at_time(7.5);
+        assert_eq!(e.time(), Some(7.5));
+        assert!(matches!(e, EstimatorError::NonFinite { index: 2, .. }));
+        let core = EstimatorError::Core(CoreError::NotPositiveDefinite { what: "Q".into() });
+        assert_eq!(core.time(), None);
+        assert_eq!(core.at_time(3.0).time(), Some(3.0));
+        let range = EstimatorError::OutOfRange {
+            what: "k".into(),
+            value: -1.0,
+            expected: "> 0",
+        };
+        assert_eq!(range.clone().at_time(1.0), range);
     }
 
     #[test]

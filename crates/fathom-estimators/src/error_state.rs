@@ -43,6 +43,11 @@ pub type ErrorVector = SVector<f64, N_ERROR_STATES>;
 pub type ErrorCovariance = SMatrix<f64, N_ERROR_STATES, N_ERROR_STATES>;
 
 /// The feedback error-state filter (see the module docs).
+///
+/// Bad input: a non-finite INS value, aid, depth, `Phi` or `Q_d` is an error naming
+/// the quantity and index with the time stamp; a covariance that stops being
+/// positive definite (e.g. an indefinite `Q_d`, a variance `<= 0`) is an error with
+/// the time; the filter is unchanged on error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ErrorStateFilter {
     kf: KalmanFilter<N_ERROR_STATES>,
@@ -96,6 +101,9 @@ impl ErrorStateFilter {
         r: &Matrix3<f64>,
         gate: Option<GateThreshold>,
     ) -> Result<Gate<3>, EstimatorError> {
+        let t = self.kf.time();
+        check_finite_at("INS velocity", ins_vel_in_nav.as_slice(), t)?;
+        check_finite_at("aid velocity", aid_vel_in_nav.as_slice(), t)?;
         let mut h = SMatrix::<f64, 3, N_ERROR_STATES>::zeros();
         h.fixed_view_mut::<3, 3>(0, VEL)
             .copy_from(&Matrix3::identity());
@@ -120,6 +128,9 @@ impl ErrorStateFilter {
         depth: f64,
         r: f64,
     ) -> Result<UpdateInfo<1>, EstimatorError> {
+        let t = self.kf.time();
+        check_finite_at("INS depth", &[ins_depth], t)?;
+        check_finite_at("measured depth", &[depth], t)?;
         let mut h = SMatrix::<f64, 1, N_ERROR_STATES>::zeros();
         h[(0, POS + 2)] = 1.0;
         let nu = Vector1::new(ins_depth - depth) - h * self.kf.state();
@@ -148,10 +159,70 @@ impl ErrorStateFilter {
     }
 }
 
+/// The first non-finite entry of `values` as an error naming `what` at time `t`.
+fn check_finite_at(what: &str, values: &[f64], t: f64) -> Result<(), EstimatorError> {
+    crate::error::check_finite_entries(what, values.len(), 1, |i, _| values[i], t)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use approx::assert_abs_diff_eq;
+
+    /// Bad input (crate docs): non-finite INS or aid values name the quantity and
+    /// the component at the filter time; a non-finite `Phi` and a `Q_d` that makes
+    /// `P` indefinite are errors at the target time; the filter is unchanged.
+    #[test]
+    fn bad_input_names_the_quantity_and_the_time() {
+        let p0 = ErrorStateFilter::diagonal_covariance([1.0, 1.0, 1e-3, 1e-3, 1e-6]);
+        let mut f = ErrorStateFilter::new(&p0, 3.0).unwrap();
+        let before = f.clone();
+        let r = Matrix3::identity();
+        let v = Vector3::new(1.0, 0.0, 0.0);
+        let nan = Vector3::new(1.0, 0.0, f64::NAN);
+        for (ins, aid, what) in [(&v, &nan, "aid velocity"), (&nan, &v, "INS velocity")] {
+            match f.update_velocity(ins, aid, &r, None).unwrap_err() {
+                EstimatorError::NonFinite {
+                    what: w,
+                    index,
+                    time,
+                    ..
+                } => {
+                    assert!(w.contains(what), "{w}");
+                    assert_eq!((index, time), (2, 3.0));
+                }
+                other => panic!("unexpected {other}"),
+            }
+        }
+        let e = f.update_depth(10.0, f64::INFINITY, 1.0).unwrap_err();
+        assert!(e.to_string().contains("depth"), "{e}");
+        assert_eq!(e.time(), Some(3.0));
+        let e = f.update_depth(10.0, 10.5, 0.0).unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { time, .. } if *time == 3.0),
+            "{e}"
+        );
+        let mut phi = ErrorCovariance::identity();
+        phi[(0, 1)] = f64::NAN;
+        let e = f.predict(&phi, &ErrorCovariance::zeros(), 3.1).unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { index: 1, time, .. } if *time == 3.1),
+            "{e}"
+        );
+        // Q_d with a large negative eigenvalue (diagonal >= 0, off-diagonal 10):
+        // P = I + Q_d is indefinite.
+        let mut qd = ErrorCovariance::zeros();
+        qd[(0, 1)] = 10.0;
+        qd[(1, 0)] = 10.0;
+        let e = f
+            .predict(&ErrorCovariance::identity(), &qd, 3.1)
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { time, .. } if *time == 3.1),
+            "{e}"
+        );
+        assert_eq!(f, before);
+    }
 
     /// A velocity error seen by the aid goes into the velocity-error state with the
     /// Kalman gain, and feedback resets it.

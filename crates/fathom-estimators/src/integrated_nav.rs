@@ -101,6 +101,11 @@ impl IntegratedNavConfig {
 }
 
 /// The 9-state integrated navigation filter (see the module docs).
+///
+/// Bad input: non-finite INS increments, attitude, `dt` or aiding measurements are
+/// errors naming the quantity and index with the time stamp; a propagation that
+/// overflows and a covariance that stops being positive definite are errors with the
+/// time; the state is never committed on error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct IntegratedNavFilter {
     kf: KalmanFilter<9>,
@@ -151,15 +156,25 @@ impl IntegratedNavFilter {
     /// step is deferred (see the module docs). No allocation.
     ///
     /// # Errors
-    /// [`EstimatorError::NonFinite`] for a non-finite input or `dt <= 0`
-    /// ([`EstimatorError::OutOfRange`]); the filter is then unchanged.
+    /// [`EstimatorError::NonFinite`] for a non-finite input, `dt` or propagated state
+    /// (overflow), stamped with the target time (a non-finite `dt`: the current
+    /// time), or `dt <= 0` ([`EstimatorError::OutOfRange`]); the filter is then
+    /// unchanged.
     pub fn propagate(
         &mut self,
         dv_in_nav: &Vector3<f64>,
         nav_from_body: &Matrix3<f64>,
         dt: f64,
     ) -> Result<(), EstimatorError> {
-        if !(dt > 0.0 && dt.is_finite()) {
+        if !dt.is_finite() {
+            return Err(EstimatorError::NonFinite {
+                what: "nav propagate dt".into(),
+                index: 0,
+                value: dt,
+                time: self.time,
+            });
+        }
+        if dt <= 0.0 {
             return Err(EstimatorError::OutOfRange {
                 what: "nav propagate dt".into(),
                 value: dt,
@@ -184,10 +199,27 @@ impl IntegratedNavFilter {
         let v_old = self.x.fixed_rows::<3>(3).into_owned();
         let v_new = v_old + dv_in_nav - nav_from_body * b * dt;
         let p_new = self.x.fixed_rows::<3>(0) + (v_old + v_new) * (0.5 * dt);
+        let a_new = self.acc_a - nav_from_body * dt;
+        let b_new = self.acc_b + (self.acc_a + a_new) * (0.5 * dt);
+        // An overflow (absurd input) is refused before anything is committed.
+        crate::error::check_finite_entries("propagated position", 3, 1, |r, _| p_new[r], t_new)?;
+        crate::error::check_finite_entries("propagated velocity", 3, 1, |r, _| v_new[r], t_new)?;
+        crate::error::check_finite_entries(
+            "accumulated transition (bias columns)",
+            3,
+            6,
+            |r, c| {
+                if c < 3 {
+                    a_new[(r, c)]
+                } else {
+                    b_new[(r, c - 3)]
+                }
+            },
+            t_new,
+        )?;
         self.x.fixed_rows_mut::<3>(0).copy_from(&p_new);
         self.x.fixed_rows_mut::<3>(3).copy_from(&v_new);
-        let a_new = self.acc_a - nav_from_body * dt;
-        self.acc_b += (self.acc_a + a_new) * (0.5 * dt);
+        self.acc_b = b_new;
         self.acc_a = a_new;
         self.acc_t += dt;
         self.time = t_new;
@@ -308,6 +340,60 @@ mod tests {
         }
         .check()
         .unwrap()
+    }
+
+    /// Bad input (crate docs): non-finite inputs or step, and a propagation that
+    /// overflows the state, are errors stamped with the target time and never
+    /// committed; a non-finite aid is an error with the filter time.
+    #[test]
+    fn bad_input_and_overflow_are_errors_and_never_committed() {
+        let mut f =
+            IntegratedNavFilter::new(&cfg(), &Vector3::zeros(), &Vector3::zeros(), 0.0).unwrap();
+        let c = Matrix3::identity();
+        let huge = Vector3::new(1e308, 0.0, 0.0);
+        f.propagate(&huge, &c, 0.1).unwrap();
+        let before = f.clone();
+        let e = f.propagate(&huge, &c, 0.1).unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { time, .. } if *time == 0.2),
+            "{e}"
+        );
+        assert_eq!(f, before);
+        assert!(
+            f.position()
+                .iter()
+                .chain(f.velocity().iter())
+                .all(|v| v.is_finite())
+        );
+        let e = f.propagate(&Vector3::zeros(), &c, f64::NAN).unwrap_err();
+        assert_eq!(e.time(), Some(0.1), "{e}");
+        let e = f
+            .propagate(&Vector3::new(0.0, f64::NAN, 0.0), &c, 0.1)
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { index: 1, time, .. } if *time == 0.2),
+            "{e}"
+        );
+        assert_eq!(f, before);
+        let mut g =
+            IntegratedNavFilter::new(&cfg(), &Vector3::zeros(), &Vector3::zeros(), 0.0).unwrap();
+        g.propagate(&Vector3::new(0.01, 0.0, 0.0), &c, 0.1).unwrap();
+        let (pos, vel) = (g.position(), g.velocity());
+        let e = g
+            .update_velocity(&Vector3::new(f64::INFINITY, 0.0, 0.0), &(c * 0.01), None)
+            .unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { index: 0, time, .. } if *time == 0.1),
+            "{e}"
+        );
+        let e = g.update_depth(f64::NAN, 0.01).unwrap_err();
+        assert_eq!(e.time(), Some(0.1));
+        let e = g.update_depth(1.0, -0.01).unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { time, .. } if *time == 0.1),
+            "{e}"
+        );
+        assert_eq!((g.position(), g.velocity()), (pos, vel));
     }
 
     /// The accumulated Jacobian equals the finite-difference Jacobian of the

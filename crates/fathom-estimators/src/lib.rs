@@ -45,6 +45,40 @@
 //! filter time stamp; time-free helpers (fusion, [`gating::nis`], [`models`]) wrap a
 //! [`fathom_core::CoreError`]. Every failing step leaves the filter unchanged.
 //!
+//! # Bad input
+//!
+//! One policy for every filter: bad data never reach the state or the covariance.
+//! A non-finite (NaN, +-inf) measurement, input or time is either **refused with an
+//! error** naming the quantity, the index and the filter time (the default), or,
+//! in the filter built to skip bad data (the scheme policy, which already logs
+//! every measurement's fate), **dropped and counted**: logged, counted in the
+//! report and never applied. A covariance that stops being positive definite
+//! (an absurd input that overflows, an indefinite `Q`, a variance `<= 0`) is always
+//! an error carrying the filter time of the failing step (usually
+//! [`EstimatorError::NotPositiveDefinite`], or [`EstimatorError::NonFinite`] for
+//! "predicted covariance P" when it overflowed). Every failing step leaves the
+//! filter unchanged, so no NaN is ever propagated.
+//!
+//! | filter | entry points | non-finite measurement / input / time | covariance loses positive definiteness |
+//! | --- | --- | --- | --- |
+//! | [`KalmanFilter`] ([`kalman`], [`stacked`]) | `predict*`, `update*`, `update_sequential_scalar*`, `update_stacked*` | error: quantity, index, time | error with the time ("innovation covariance S", "predicted / updated covariance P") |
+//! | [`ekf::Ekf`] (beacon and wheel-odometry models) | `predict_to`, `update_sequential`, `update_stacked`, `try_apply_input` | error: quantity, item index, time (a model's input error is stamped with the prediction's target time; an unchecked `apply_input` sample fails the next prediction) | error with the time |
+//! | [`schemes::SchemeFilter`] (+ [`robust`]) | `process`, `advance_to` | **dropped + counted**: [`schemes::Disposition::NonFinite`], [`schemes::ChannelCounts::non_finite`], [`schemes::SchemeFilter::non_finite_inputs`] | error with the time of the failing epoch / prediction; the group stays pending |
+//! | [`velocity_filter::VelocityFilter`] | `predict`, `update`, `step` (all or nothing) | error: quantity, time | error with the time |
+//! | [`integrated_nav::IntegratedNavFilter`] | `propagate` (also refuses an overflowing state), `propagate_covariance`, `update_velocity`, `update_depth` | error: quantity, index, time | error with the time |
+//! | [`error_state::ErrorStateFilter`] | `predict`, `update_velocity`, `update_depth` | error: quantity (INS / aid / depth, `Phi`, `Q_d`), index, time | error with the time |
+//! | [`architectures::MeasurementFusion`] | `step`, `step_stacked` | error: sensor, index in its block, time | error with the time |
+//! | [`architectures::TrackToTrack`] | `step` | error: track, index, time | filter or fusion error with the time |
+//! | [`architectures::EqualizeFuseFeedback`] | `step` | error: track, sensor state / measurement, index, time | filter or fusion error with the time |
+//! | [`fusion`], [`architectures::rules`], [`gating::nis`] (no notion of time) | `fuse_*`, `nis` | [`EstimatorError::Core`] (the architectures add the time) | [`EstimatorError::Core`] |
+//!
+//! A NaN NIS never passes a gate ([`GateThreshold::accepts`]). The INS crate
+//! (`fathom-ins`) follows the same rule: `Strapdown::step` refuses a non-finite
+//! increment or a step whose new state would not be finite (the strapdown has no
+//! clock: the caller adds the time), and the error-model functions are pure (a NaN
+//! in gives a NaN `Phi` / `Q_d`, which [`error_state::ErrorStateFilter::predict`]
+//! refuses with the time).
+//!
 //! Allocation: the fixed-size path (`predict*`, `update*` with `const M`) does not
 //! allocate except to build an error. The sequential update allocates its report; the
 //! stacked update allocates faer/nalgebra dynamic matrices.

@@ -37,6 +37,11 @@
 //! `P(|N(0,1)| > k)^n` (2e-7 for `k = 2`, `n = 5`), so the rule practically never
 //! fires when nothing is wrong. A beacon that is consistently wrong (e.g. multipath)
 //! triggers an inflation every `n` of its ranges; the other beacons shrink `P` again.
+//!
+//! Bad input: non-finite measurements never reach the robust step: the scheme filter
+//! drops and counts them first ([`crate::schemes`], "Bad data"), so they are neither
+//! gated, down-weighted nor counted as rejections by the lock-out monitor. A
+//! covariance inflation that overflows is an error with the filter time.
 
 use crate::EstimatorError;
 

@@ -40,7 +40,19 @@
 //! events stamped exactly `t_k` still belong to epoch `k`.
 //!
 //! Every measurement ends in exactly one [`Decision`] (accepted, rejected, stale,
-//! superseded), so rejected measurements are reported, not lost.
+//! superseded, non-finite), so rejected measurements are reported, not lost.
+//!
+//! # Bad data (non-finite values and stamps)
+//! The scheme filter is built to skip bad data: a measurement whose value or stamp is
+//! NaN or infinite is **dropped**: logged as [`Disposition::NonFinite`] at the current
+//! filter time, counted per channel ([`ChannelCounts::non_finite`]) and never applied
+//! (it does not close an AS group, fire an epoch or supersede a pending sample). An
+//! input sample with a non-finite component or stamp is dropped and counted
+//! ([`SchemeFilter::non_finite_inputs`]); the held input stays the previous one. An
+//! unknown channel is a configuration error, not bad data. A covariance that stops
+//! being positive definite is an [`EstimatorError`] carrying the filter time of the
+//! failing step; the EKF keeps its last good estimate and the measurements of the
+//! failing group stay pending.
 //!
 //! # Robust handling (optional)
 //! With [`SchemeFilter::with_robust`] every group (AS same-stamp group, SC/SI epoch) is
@@ -238,6 +250,8 @@ pub enum Disposition {
     Stale,
     /// A newer sample of the same channel in the same epoch window replaced it (SC/SI).
     Superseded,
+    /// Its value or stamp is NaN or infinite: dropped, never applied (module docs).
+    NonFinite,
 }
 
 /// The fate of one measurement.
@@ -271,9 +285,15 @@ pub struct ChannelCounts {
     pub stale: usize,
     /// Superseded within an epoch window.
     pub superseded: usize,
+    /// Dropped because the value or the stamp is not finite.
+    pub non_finite: usize,
 }
 
 /// An [`Ekf`] run under an [`UpdateScheme`] (module docs).
+///
+/// Bad input: non-finite measurements (value or stamp) and input samples are dropped
+/// and counted ([`ChannelCounts::non_finite`], [`SchemeFilter::non_finite_inputs`]);
+/// loss of positive definiteness is an error with the filter time (module docs).
 #[derive(Debug, Clone)]
 pub struct SchemeFilter<const N: usize, M: MotionModel<N>, S> {
     ekf: Ekf<N, M>,
@@ -289,6 +309,7 @@ pub struct SchemeFilter<const N: usize, M: MotionModel<N>, S> {
     decisions: Vec<Decision>,
     counts: Vec<ChannelCounts>,
     late_inputs: usize,
+    non_finite_inputs: usize,
     /// Optional robust handling, its lock-out monitor and the down-weighted count.
     robust: Option<RobustPolicy>,
     lockout: LockoutMonitor,
@@ -312,6 +333,7 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
             decisions: Vec::new(),
             counts: vec![ChannelCounts::default(); c],
             late_inputs: 0,
+            non_finite_inputs: 0,
             robust: None,
             lockout: LockoutMonitor::default(),
             downweighted: 0,
@@ -360,6 +382,16 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
         self.late_inputs
     }
 
+    /// Input samples dropped because a component or the stamp is not finite.
+    pub fn non_finite_inputs(&self) -> usize {
+        self.non_finite_inputs
+    }
+
+    /// Measurements dropped because the value or the stamp is not finite, all channels.
+    pub fn non_finite_measurements(&self) -> usize {
+        self.counts.iter().map(|c| c.non_finite).sum()
+    }
+
     fn scheme(&self) -> UpdateScheme {
         self.config.0.scheme
     }
@@ -368,26 +400,19 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
         self.t0 + k as f64 * self.config.0.epoch_period
     }
 
-    /// Processes one event (module docs).
+    /// Processes one event (module docs). Non-finite values and stamps are dropped
+    /// and counted (module docs, "Bad data"), not errors.
     ///
     /// # Errors
-    /// [`EstimatorError::NonFinite`] for a non-finite stamp or value,
-    /// [`EstimatorError::OutOfRange`] for an unknown channel, and the EKF's errors.
+    /// [`EstimatorError::OutOfRange`] for an unknown channel, and the EKF's errors
+    /// (carrying the filter time of the failing step).
     pub fn process(&mut self, event: Event<M::InputSample, S>) -> Result<(), EstimatorError> {
-        let stamp = match &event {
-            Event::Input { stamp, .. } => *stamp,
-            Event::Measurement(o) => o.stamp,
-        };
-        if !stamp.is_finite() {
-            return Err(EstimatorError::NonFinite {
-                what: "event time stamp".into(),
-                index: 0,
-                value: stamp,
-                time: self.ekf.time(),
-            });
-        }
         match event {
             Event::Input { stamp, sample } => {
+                if !stamp.is_finite() || self.ekf.model().non_finite_in_sample(&sample).is_some() {
+                    self.non_finite_inputs += 1;
+                    return Ok(());
+                }
                 if self.scheme().is_synchronous() {
                     self.fire_epochs_before(stamp)?;
                 } else if self.group_stamp.is_some_and(|(s, _)| stamp != s) {
@@ -409,16 +434,10 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
                         expected: "< number of channels",
                     });
                 }
-                if !obs.value.is_finite() {
-                    return Err(EstimatorError::NonFinite {
-                        what: format!(
-                            "observation value (channel {}, tag {})",
-                            obs.channel, obs.tag
-                        ),
-                        index: 0,
-                        value: obs.value,
-                        time: self.ekf.time(),
-                    });
+                if !(obs.value.is_finite() && obs.stamp.is_finite()) {
+                    let t = self.ekf.time();
+                    self.log(&obs, t, Disposition::NonFinite, None);
+                    return Ok(());
                 }
                 if self.scheme().is_synchronous() {
                     self.accept_sync(obs)
@@ -456,6 +475,7 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
             Disposition::Rejected => c.rejected += 1,
             Disposition::Stale => c.stale += 1,
             Disposition::Superseded => c.superseded += 1,
+            Disposition::NonFinite => c.non_finite += 1,
         }
         self.decisions.push(Decision {
             channel: obs.channel,
@@ -506,11 +526,19 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
     }
 
     fn flush_group(&mut self) -> Result<(), EstimatorError> {
-        let Some((_, at)) = self.group_stamp.take() else {
+        let Some((stamp, at)) = self.group_stamp.take() else {
             return Ok(());
         };
         let mut group = std::mem::take(&mut self.group);
-        let outcomes = self.update_individual(&group)?;
+        let outcomes = match self.update_individual(&group) {
+            Ok(o) => o,
+            Err(e) => {
+                // Keep the group pending: the EKF is unchanged by the failed update.
+                self.group = group;
+                self.group_stamp = Some((stamp, at));
+                return Err(e);
+            }
+        };
         self.log_outcomes(&group, at, &outcomes);
         group.clear();
         self.group = group; // keep the allocation
@@ -648,32 +676,49 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
         let at = self.ekf.time();
         let group: Vec<Observation<S>> = self.pending.iter_mut().filter_map(Option::take).collect();
         if !group.is_empty() {
-            let outcomes = match (self.scheme(), self.robust) {
-                (UpdateScheme::SynchronousCollective, Some(policy)) => {
-                    self.update_robust(&group, true, policy)?
+            match self.update_epoch_group(&group) {
+                Ok(outcomes) => self.log_outcomes(&group, at, &outcomes),
+                Err(e) => {
+                    // Keep the samples pending: the EKF is unchanged by the failed update.
+                    for o in group {
+                        let c = o.channel;
+                        self.pending[c] = Some(o);
+                    }
+                    return Err(e);
                 }
-                (UpdateScheme::SynchronousCollective, None) => {
-                    let cov = &self.config.0.channel_cov;
-                    let r = DMatrix::from_fn(group.len(), group.len(), |a, b| {
-                        cov[(group[a].channel, group[b].channel)]
-                    });
-                    let items: Vec<GroupItem<'_, S>> = group
-                        .iter()
-                        .map(|o| GroupItem {
-                            value: o.value,
-                            model: &o.model,
-                            variance: cov[(o.channel, o.channel)],
-                            gate: self.config.0.gates[o.channel],
-                        })
-                        .collect();
-                    self.ekf.update_stacked(&items, &r)?
-                }
-                _ => self.update_individual(&group)?,
-            };
-            self.log_outcomes(&group, at, &outcomes);
+            }
         }
         self.last_epoch = te;
         self.next_epoch += 1;
         Ok(())
+    }
+
+    /// The SC / SI update of one epoch's samples.
+    fn update_epoch_group(
+        &mut self,
+        group: &[Observation<S>],
+    ) -> Result<Vec<ScalarOutcome>, EstimatorError> {
+        match (self.scheme(), self.robust) {
+            (UpdateScheme::SynchronousCollective, Some(policy)) => {
+                self.update_robust(group, true, policy)
+            }
+            (UpdateScheme::SynchronousCollective, None) => {
+                let cov = &self.config.0.channel_cov;
+                let r = DMatrix::from_fn(group.len(), group.len(), |a, b| {
+                    cov[(group[a].channel, group[b].channel)]
+                });
+                let items: Vec<GroupItem<'_, S>> = group
+                    .iter()
+                    .map(|o| GroupItem {
+                        value: o.value,
+                        model: &o.model,
+                        variance: cov[(o.channel, o.channel)],
+                        gate: self.config.0.gates[o.channel],
+                    })
+                    .collect();
+                self.ekf.update_stacked(&items, &r)
+            }
+            _ => self.update_individual(group),
+        }
     }
 }

@@ -231,3 +231,42 @@ impl<const N: usize> KalmanFilter<N> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fathom_core::Gaussian;
+    use nalgebra::{Matrix2, Vector2};
+
+    /// Bad input (crate docs): the stacked update follows the core's policy: a
+    /// non-finite measurement is an error naming the index and the time, a variance
+    /// `<= 0` a positive-definiteness error with the time; the filter is unchanged.
+    #[test]
+    fn bad_input_is_an_error_with_index_and_time() {
+        let prior = Gaussian::new(Vector2::new(1.0, 2.0), Matrix2::identity()).unwrap();
+        let mut kf = KalmanFilter::new(prior, 4.0).unwrap();
+        let before = kf.clone();
+        let h = DMatrix::identity(2, 2);
+        let r = DMatrix::identity(2, 2) * 0.1;
+        for bad in [f64::NAN, f64::INFINITY] {
+            let z = DVector::from_vec(vec![1.0, bad]);
+            let e = kf.update_stacked(&z, &h, &r).unwrap_err();
+            assert!(
+                matches!(&e, EstimatorError::NonFinite { index: 1, time, .. } if *time == 4.0),
+                "{e}"
+            );
+            let gate = GateThreshold::from_sigma_distance(3.0).unwrap();
+            assert!(kf.update_stacked_gated(&z, &h, &r, gate).is_err());
+            assert_eq!(kf, before);
+        }
+        let mut r_bad = r.clone();
+        r_bad[(1, 1)] = -0.1;
+        let z = DVector::from_vec(vec![1.0, 2.0]);
+        let e = kf.update_stacked(&z, &h, &r_bad).unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NotPositiveDefinite { time, .. } if *time == 4.0),
+            "{e}"
+        );
+        assert_eq!(kf, before);
+    }
+}

@@ -94,6 +94,10 @@ impl VelocityFilterConfig {
 }
 
 /// The velocity Kalman filter (see the module docs).
+///
+/// Bad input: a non-finite rpm, DVL speed or time is an error naming it with the
+/// time stamp; a covariance that stops being positive definite (e.g. an absurd rpm)
+/// is an error at the step's time; the filter is unchanged on error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VelocityFilter {
     kf: KalmanFilter<3>,
@@ -161,20 +165,24 @@ impl VelocityFilter {
 
     /// One VKF cycle at time `t`: predict with `rpm`, then update with the DVL forward
     /// speed if `dvl_forward_speed` is `Some` (the switching box judged the DVL valid);
-    /// with `None`, `sf` and `b` are held.
+    /// with `None`, `sf` and `b` are held. All or nothing: on error the filter is
+    /// unchanged (no prediction is committed either).
     ///
     /// # Errors
-    /// As [`VelocityFilter::predict`] / [`VelocityFilter::update`].
+    /// As [`VelocityFilter::predict`] / [`VelocityFilter::update`] (the update's
+    /// errors then carry `t`).
     pub fn step(
         &mut self,
         rpm: f64,
         dvl_forward_speed: Option<f64>,
         t: f64,
     ) -> Result<(), EstimatorError> {
-        self.predict(rpm, t)?;
+        let mut next = self.clone();
+        next.predict(rpm, t)?;
         if let Some(z) = dvl_forward_speed {
-            self.update(z)?;
+            next.update(z)?;
         }
+        *self = next;
         Ok(())
     }
 
@@ -209,7 +217,9 @@ impl VelocityFilter {
         &self.kf
     }
 
-    /// RPM-derived forward speed `sf rpm + b` and its variance
+    /// RPM-derived forward speed `sf rpm + b` and its variance (a pure function: a
+    /// non-finite `rpm` gives non-finite values, which the aided filter's update then
+    /// refuses with an error)
     /// `[rpm, 1] P_(sf,b) [rpm, 1]^T + sf^2 sigma_rpm^2 + q_V`.
     pub fn rpm_speed(&self, rpm: f64) -> (f64, f64) {
         let x = self.kf.state();
@@ -330,6 +340,42 @@ mod tests {
             bias_rw_psd: 1e-10,
             dvl_sigma: 0.02,
         }
+    }
+
+    /// Bad input (crate docs): a non-finite rpm, DVL speed or time is an error with the
+    /// time stamp, an rpm so large that the covariance overflows is a
+    /// positive-definiteness error at the target time, and `step` is all-or-nothing.
+    #[test]
+    fn bad_input_is_an_error_with_the_time_and_the_filter_is_unchanged() {
+        let cfg = params().check().unwrap();
+        let mut f = VelocityFilter::new(&cfg, 0.0).unwrap();
+        f.step(1000.0, Some(8.0), 1.0).unwrap();
+        let before = f.clone();
+        for bad in [f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            let e = f.predict(bad, 2.0).unwrap_err();
+            assert!(
+                matches!(&e, EstimatorError::NonFinite { time, .. } if *time == 2.0),
+                "{e}"
+            );
+            let e = f.update(bad).unwrap_err();
+            assert!(
+                matches!(&e, EstimatorError::NonFinite { time, .. } if *time == 1.0),
+                "{e}"
+            );
+            let e = f.step(1000.0, Some(bad), 2.0).unwrap_err();
+            assert!(
+                matches!(&e, EstimatorError::NonFinite { time, .. } if *time == 2.0),
+                "{e}"
+            );
+            assert_eq!(f, before);
+        }
+        let e = f.predict(1000.0, f64::NAN).unwrap_err();
+        assert!(matches!(e, EstimatorError::NonFinite { .. }), "{e}");
+        let e = f.step(1e200, None, 2.0).unwrap_err();
+        assert!(e.to_string().contains("predicted covariance P"), "{e}");
+        assert_eq!(e.time(), Some(2.0));
+        assert_eq!(f, before);
+        assert_eq!(f.num_updates(), 1);
     }
 
     /// Speed profile of the vkf route: 2 m/s accelerating to 5.144 m/s over 120 s.

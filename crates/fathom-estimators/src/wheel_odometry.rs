@@ -74,6 +74,11 @@ impl WheelOdometryParams {
 }
 
 /// Wheel-odometry motion in 2D with random-walk calibration states (module docs).
+///
+/// Bad input: a non-finite odometry rate is an error of the next prediction naming
+/// the component (0 = speed, 1 = turn rate) at its target time
+/// ([`OdometryRate::from_increments`] refuses non-finite increments up front); under
+/// a [`crate::schemes::SchemeFilter`] such samples are dropped and counted.
 #[derive(Debug, Clone, PartialEq)]
 pub struct WheelOdometry {
     var_d_per_m: f64,
@@ -117,14 +122,14 @@ impl OdometryRate {
                 expected: "> 0",
             });
         }
-        for (i, v) in [delta_distance, delta_heading].into_iter().enumerate() {
-            if !v.is_finite() {
-                return Err(EstimatorError::NonFinite {
+        for (index, value) in [delta_distance, delta_heading].into_iter().enumerate() {
+            if !value.is_finite() {
+                // No filter time here: a time-free check (the caller knows the row).
+                return Err(EstimatorError::Core(fathom_core::CoreError::NonFinite {
                     what: "odometry increment (distance, heading)".into(),
-                    index: i,
-                    value: v,
-                    time: interval,
-                });
+                    index,
+                    value,
+                }));
             }
         }
         Ok(OdometryRate {
@@ -165,6 +170,15 @@ impl<const N: usize> MotionModel<N> for WheelOdometry {
         *input = *sample;
     }
 
+    /// Index 0 = speed, 1 = turn rate.
+    fn non_finite_in_sample(&self, sample: &OdometryRate) -> Option<(&'static str, usize, f64)> {
+        [sample.speed, sample.turn_rate]
+            .into_iter()
+            .enumerate()
+            .find(|(_, v)| !v.is_finite())
+            .map(|(i, v)| ("odometry rate (speed, turn rate)", i, v))
+    }
+
     fn propagate(
         &self,
         x: &SVector<f64, N>,
@@ -178,12 +192,23 @@ impl<const N: usize> MotionModel<N> for WheelOdometry {
                 got: N,
             });
         }
-        if !(input.speed.is_finite() && input.turn_rate.is_finite() && dt.is_finite()) {
+        // The time stamp is set by `Ekf::predict_to` (the model does not know it).
+        if let Some((what, index, value)) =
+            <Self as MotionModel<N>>::non_finite_in_sample(self, input)
+        {
             return Err(EstimatorError::NonFinite {
-                what: "odometry rate or step".into(),
+                what: what.into(),
+                index,
+                value,
+                time: f64::NAN,
+            });
+        }
+        if !dt.is_finite() {
+            return Err(EstimatorError::NonFinite {
+                what: "odometry prediction step dt".into(),
                 index: 0,
-                value: f64::NAN,
-                time: dt,
+                value: dt,
+                time: f64::NAN,
             });
         }
         let dd = input.speed * dt;
@@ -366,6 +391,54 @@ mod tests {
             .check()
             .is_err()
         );
+    }
+
+    /// Bad input (crate docs): a non-finite increment is a time-free error naming the
+    /// component; a non-finite held rate is an error of the EKF's next prediction at
+    /// its target time, naming the component; the EKF is unchanged.
+    #[test]
+    fn non_finite_odometry_is_an_error_with_the_component_and_time() {
+        let e = OdometryRate::from_increments(0.1, f64::INFINITY, 0.2).unwrap_err();
+        assert!(
+            matches!(
+                &e,
+                EstimatorError::Core(fathom_core::CoreError::NonFinite { index: 1, .. })
+            ),
+            "{e}"
+        );
+        let prior =
+            fathom_core::Gaussian::new(Vector3::new(0.0, 0.0, 0.1), nalgebra::Matrix3::identity())
+                .unwrap();
+        let mut ekf =
+            crate::ekf::Ekf::<3, _>::new(prior, 2.0, model(0), OdometryRate::default()).unwrap();
+        let bad = OdometryRate {
+            speed: 1.0,
+            turn_rate: f64::NAN,
+        };
+        let e = ekf.try_apply_input(&bad).unwrap_err();
+        assert!(
+            matches!(&e, EstimatorError::NonFinite { index: 1, time, .. } if *time == 2.0),
+            "{e}"
+        );
+        ekf.apply_input(&OdometryRate {
+            speed: f64::NEG_INFINITY,
+            turn_rate: 0.0,
+        });
+        let before = ekf.clone();
+        let e = ekf.predict_to(2.5).unwrap_err();
+        match &e {
+            EstimatorError::NonFinite {
+                what,
+                index,
+                value,
+                time,
+            } => {
+                assert!(what.contains("speed"), "{what}");
+                assert_eq!((*index, *value, *time), (0, f64::NEG_INFINITY, 2.5));
+            }
+            other => panic!("unexpected {other}"),
+        }
+        assert_eq!(ekf, before);
     }
 
     #[test]

@@ -171,6 +171,10 @@ pub(crate) fn position_update(
 /// A strapdown INS integrating IMU increments in local-level NED (see module docs).
 ///
 /// `step` performs no heap allocation.
+///
+/// Bad input: a non-finite increment (NaN IMU `delta_theta` / `delta_v`, `dt`) or a
+/// step that would leave a non-finite state is an [`InsError`] naming the field and
+/// component, and the state is unchanged (no clock here: the caller adds the time).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Strapdown {
     state: InsState,
@@ -257,9 +261,11 @@ impl Strapdown {
     /// Integrates one IMU increment (see the module docs for the equations).
     ///
     /// # Errors
-    /// [`InsError::NonPositiveDt`] / [`InsError::NonFinite`] for a bad increment,
+    /// [`InsError::NonPositiveDt`] / [`InsError::NonFinite`] for a bad increment or a
+    /// step whose new state would not be finite (overflow),
     /// [`InsError::LatitudeOutOfRange`] if the step would reach a pole. On error the
-    /// strapdown is unchanged.
+    /// strapdown is unchanged. The strapdown has no clock: the caller adds the time
+    /// stamp to the error.
     pub fn step(&mut self, inc: &ImuIncrement) -> Result<(), InsError> {
         inc.check()?;
         let s = &self.state;
@@ -303,6 +309,12 @@ impl Strapdown {
             nav_from_body: q_new,
         };
         crate::error::check_finite("propagated vel_in_nav", new_state.vel_in_nav.as_slice())?;
+        // A finite velocity can still overflow the position (absurd dt or increment).
+        crate::error::check_finite(
+            "propagated position (lat, lon, h)",
+            &[lat_new, lon_new, h_new],
+        )?;
+        crate::error::check_finite("propagated attitude quaternion", q_new.coords.as_slice())?;
         self.history = Some(NavHistory {
             lat: s.lat,
             h: s.h,
@@ -371,6 +383,25 @@ mod tests {
         assert!(Strapdown::new(bad).is_err());
         assert!(ins.set_state(bad).is_err());
         assert!(ins.step(&ok).is_ok());
+    }
+
+    /// Bad input (`fathom_estimators` crate docs, "Bad input"): finite but absurd
+    /// increments whose step would leave a non-finite state (here the height
+    /// overflows to -inf while the velocity stays finite) are refused and nothing is
+    /// committed.
+    #[test]
+    fn a_step_to_a_non_finite_state_is_refused() {
+        let s0 = InsState::new(busan(), Vector3::zeros(), UnitQuaternion::identity());
+        let mut ins = Strapdown::new(s0).unwrap();
+        let absurd = ImuIncrement::new(10.0, Vector3::zeros(), Vector3::new(0.0, 0.0, 1e308));
+        let err = ins.step(&absurd).unwrap_err();
+        assert!(matches!(err, InsError::NonFinite { .. }), "{err}");
+        assert_eq!(ins.state(), &s0);
+        assert!(ins.previous_increment().is_none());
+        // Negative control: a sane increment still steps.
+        let ok = ImuIncrement::new(0.01, Vector3::zeros(), Vector3::new(0.0, 0.0, -0.098));
+        ins.step(&ok).unwrap();
+        assert!(ins.state().h.is_finite());
     }
 
     #[test]

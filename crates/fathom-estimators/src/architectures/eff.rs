@@ -175,6 +175,11 @@ pub struct EffOutput<const N: usize> {
 }
 
 /// The EFF architecture (see the module docs).
+///
+/// Bad input: a non-finite sensor state or measurement is an
+/// [`ArchitectureError::Filter`] naming the track, quantity and index with the step
+/// time; loss of positive definiteness is a filter or fusion error with the time;
+/// the architecture (and the feedback sink) is untouched on error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct EqualizeFuseFeedback<const N: usize, const M1: usize, const M2: usize> {
     tracks: TrackToTrack<N, M1, M2>,
@@ -217,6 +222,21 @@ impl<const N: usize, const M1: usize, const M2: usize> EqualizeFuseFeedback<N, M
         z_aux: &SVector<f64, M2>,
         sink: &mut S,
     ) -> Result<EffOutput<N>, ArchitectureError> {
+        if self.switches.equalize {
+            for (track, state) in [("main", main_state_prev), ("aux", aux_state_prev)] {
+                if let Some(index) = state.iter().position(|v| !v.is_finite()) {
+                    return Err(ArchitectureError::Filter {
+                        track,
+                        source: crate::EstimatorError::NonFinite {
+                            what: format!("{track} sensor state (equalization input)"),
+                            index,
+                            value: state[index],
+                            time,
+                        },
+                    });
+                }
+            }
+        }
         let equalized = self
             .switches
             .equalize
@@ -433,6 +453,41 @@ mod tests {
         fn feed_back(&mut self, _: Time, _: &Gaussian<2>) -> Result<(), Refuse> {
             Err(Refuse)
         }
+    }
+
+    /// Bad input (crate docs): a non-finite sensor state (equalization input) is an
+    /// error naming the sensor, the component and the step time; unchanged.
+    #[test]
+    fn non_finite_sensor_state_is_an_error_with_the_step_time() {
+        let eq = Equalization::new(Matrix2::identity(), Matrix2::zeros()).unwrap();
+        let mut eff = EqualizeFuseFeedback::new(tracks(), eq, EffSwitches::FULL);
+        let before = eff.clone();
+        let s = Vector2::new(0.0, 1.0);
+        let nan = Vector2::new(0.0, f64::NAN);
+        let z = Vector1::new(1.0);
+        for (main, aux, track) in [(&nan, &s, "main"), (&s, &nan, "aux")] {
+            let mut rec = Recorder::default();
+            match eff.step(1.0, main, aux, &z, &z, &mut rec) {
+                Err(ArchitectureError::Filter {
+                    track: t,
+                    source:
+                        crate::EstimatorError::NonFinite {
+                            what, index, time, ..
+                        },
+                }) => {
+                    assert!(what.contains("sensor state"), "{what}");
+                    assert_eq!((t, index, time), (track, 1, 1.0));
+                }
+                other => panic!("unexpected {other:?}"),
+            }
+            assert!(rec.0.is_empty());
+            assert_eq!(eff, before);
+        }
+        let e = eff
+            .step(1.0, &s, &s, &Vector1::new(f64::NAN), &z, &mut NoFeedback)
+            .unwrap_err();
+        assert!(e.to_string().contains("t = 1 s"), "{e}");
+        assert_eq!(eff, before);
     }
 
     #[test]

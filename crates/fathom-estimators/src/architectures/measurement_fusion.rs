@@ -27,6 +27,10 @@ pub struct SensorBlock {
 /// stacked `z`, `H`, block-diagonal `R` (Joseph form). For independent sensor noises
 /// this equals the information-form combination
 /// `P+^-1 = P-^-1 + sum H_i^T R_i^-1 H_i`, `x+ = P+ (P-^-1 x- + sum H_i^T R_i^-1 z_i)`.
+///
+/// Bad input: a non-finite measurement is an [`ArchitectureError::Filter`] naming the
+/// sensor, the index inside its block and the step time; loss of positive
+/// definiteness is a filter error with the time; unchanged on error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MeasurementFusion<const N: usize, const M: usize> {
     kf: KalmanFilter<N>,
@@ -141,6 +145,19 @@ impl<const N: usize, const M: usize> MeasurementFusion<N, M> {
                 });
             }
             for (i, v) in zi.iter().enumerate() {
+                if !v.is_finite() {
+                    // Named per sensor (the stacked index would hide which one);
+                    // stamped with the step time, like the update's own errors.
+                    return Err(ArchitectureError::Filter {
+                        track: "mf",
+                        source: crate::EstimatorError::NonFinite {
+                            what: format!("measurement of sensor `{}` (block {k})", self.names[k]),
+                            index: i,
+                            value: *v,
+                            time,
+                        },
+                    });
+                }
                 z[row + i] = *v;
             }
             row += m;
@@ -203,7 +220,7 @@ fn check_covariance_dyn(r: &DMatrix<f64>) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::models;
+    use crate::{EstimatorError, models};
     use approx::assert_relative_eq;
     use nalgebra::{Matrix3, Matrix6, Vector3, Vector6};
 
@@ -258,6 +275,46 @@ mod tests {
         let mut one = MeasurementFusion::<6, 3>::new(prior(), 0.0, f, q, &blocks()[1..]).unwrap();
         let e1 = one.step(1.0, &[&z_dvl]).unwrap();
         assert!((e1.mean() - x).norm() > 1e-6);
+    }
+
+    /// Bad input (crate docs): a non-finite measurement names the sensor, the index
+    /// inside its block and the time; a `Q` that makes `P` indefinite is a
+    /// positive-definiteness error at the step time; the filter is unchanged.
+    #[test]
+    fn bad_input_names_sensor_index_and_time() {
+        let f = models::cv_transition_3d(1.0).unwrap();
+        let q = models::cv_scaled_identity_q_3d(1.0).unwrap();
+        let mut mf = MeasurementFusion::<6, 6>::new(prior(), 0.0, f, q, &blocks()).unwrap();
+        let before = mf.clone();
+        for bad in [f64::NAN, f64::INFINITY] {
+            match mf.step(1.0, &[&[1.0, 2.0, 3.0], &[1.0, 2.0, bad]]) {
+                Err(ArchitectureError::Filter {
+                    track: "mf",
+                    source:
+                        EstimatorError::NonFinite {
+                            what, index, time, ..
+                        },
+                }) => {
+                    assert!(what.contains("`dvl`"), "{what}");
+                    assert_eq!((index, time), (2, 1.0));
+                }
+                other => panic!("unexpected {other:?}"),
+            }
+            assert_eq!(mf, before);
+        }
+        let mut q_bad = Matrix6::zeros();
+        q_bad[(0, 1)] = 100.0;
+        q_bad[(1, 0)] = 100.0;
+        let mut mf = MeasurementFusion::<6, 6>::new(prior(), 0.0, f, q_bad, &blocks()).unwrap();
+        let before = mf.clone();
+        let e = mf
+            .step(1.0, &[&[1.0, 2.0, 3.0], &[1.0, 2.0, 3.0]])
+            .unwrap_err();
+        assert!(
+            matches!(&e, ArchitectureError::Filter { source: EstimatorError::NotPositiveDefinite { time, .. }, .. } if *time == 1.0),
+            "{e}"
+        );
+        assert_eq!(mf, before);
     }
 
     #[test]

@@ -30,6 +30,10 @@ pub struct TrackSnapshot<const N: usize> {
 /// Bar-Shalom–Campo rule the cross-covariance is propagated,
 /// `P12 <- (I - K1 H1) (F1 P12 F2^T + Q12) (I - K2 H2)^T`; the two corrected
 /// estimates are fused.
+///
+/// Bad input: a non-finite measurement is an [`ArchitectureError::Filter`] naming the
+/// track, the index and the step time; loss of positive definiteness is a filter or
+/// [`ArchitectureError::Fusion`] error with the time; unchanged on error.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrackToTrack<const N: usize, const M1: usize, const M2: usize> {
     main: KalmanFilter<N>,
@@ -289,6 +293,51 @@ mod tests {
             rule,
         )
         .unwrap()
+    }
+
+    /// Bad input (crate docs): a non-finite measurement is a filter error naming the
+    /// track, the index and the time; a process noise that makes `P` indefinite is a
+    /// positive-definiteness error at the step time; the tracks are unchanged.
+    #[test]
+    fn bad_input_names_track_index_and_time() {
+        let mut f = t2t(FusionRule::Independent);
+        let before = f.clone();
+        for (z_main, z_aux, track) in [(f64::NAN, 1.0, "main"), (1.0, f64::INFINITY, "aux")] {
+            match f.step(2.0, &Vector1::new(z_main), &Vector1::new(z_aux)) {
+                Err(ArchitectureError::Filter {
+                    track: t,
+                    source: crate::EstimatorError::NonFinite { index, time, .. },
+                }) => assert_eq!((t, index, time), (track, 0, 2.0)),
+                other => panic!("unexpected {other:?}"),
+            }
+            assert_eq!(f, before);
+        }
+        let indefinite = TrackModel::new(
+            Matrix2::new(1.0, 1.0, 0.0, 1.0),
+            Matrix2::new(0.0, 50.0, 50.0, 0.0),
+            RowVector2::new(1.0, 0.0),
+            Matrix1::new(1.0),
+        )
+        .unwrap();
+        let mut g = TrackToTrack::new(
+            prior(),
+            prior(),
+            Matrix2::zeros(),
+            0.0,
+            model(4.0, 9.0),
+            indefinite,
+            FusionRule::Independent,
+        )
+        .unwrap();
+        let before = g.clone();
+        let e = g
+            .step(1.5, &Vector1::new(1.0), &Vector1::new(1.0))
+            .unwrap_err();
+        assert!(
+            matches!(&e, ArchitectureError::Filter { track: "aux", source: crate::EstimatorError::NotPositiveDefinite { time, .. } } if *time == 1.5),
+            "{e}"
+        );
+        assert_eq!(g, before);
     }
 
     #[test]

@@ -345,8 +345,12 @@ pub struct SchemeRun {
     pub nees: Vec<f64>,
     /// State estimates at each instant.
     pub estimates: Vec<Vector4<f64>>,
-    /// Dispositions per channel (`range1..K`, depth).
+    /// Dispositions per channel (`range1..K`, depth); non-finite samples are
+    /// dropped and counted in [`ChannelCounts::non_finite`] (the scheme filter's
+    /// bad-data policy).
     pub counts: Vec<ChannelCounts>,
+    /// DVL / AHRS samples dropped because a component or the stamp is not finite.
+    pub non_finite_inputs: usize,
     /// Injected outliers.
     pub outliers_injected: usize,
     /// Injected outliers rejected by the gate.
@@ -415,8 +419,13 @@ pub fn events(
 /// epoch period (see the module docs). The filter starts at the truth's start time
 /// from `truth + initial_error` with covariance `P0`.
 ///
+/// Non-finite samples in `data` (value or stamp) are dropped and counted
+/// ([`SchemeRun::counts`], [`SchemeRun::non_finite_inputs`]), never applied.
+///
 /// # Errors
-/// [`SimError::Model`] wrapping filter, trajectory or statistics errors.
+/// [`SimError::Model`] wrapping filter, trajectory or statistics errors; a filter
+/// error (e.g. a covariance that stops being positive definite) names the scheme and
+/// carries the filter time of the failing step.
 pub fn run_scheme(
     truth: &VelocityCommandMotion,
     data: &BeaconSuiteData,
@@ -479,6 +488,7 @@ fn run_scheme_on(
         nees: Vec::with_capacity(n_eval),
         estimates: Vec::with_capacity(n_eval),
         counts: Vec::new(),
+        non_finite_inputs: 0,
         outliers_injected: data.outliers.len(),
         outliers_rejected: 0,
         outliers_accepted: 0,
@@ -535,6 +545,7 @@ fn run_scheme_on(
     // Superseded, stale, or stamped after the last evaluation instant (never fed).
     out.outliers_untested = out.outliers_injected - out.outliers_rejected - out.outliers_accepted;
     out.counts = filter.counts().to_vec();
+    out.non_finite_inputs = filter.non_finite_inputs();
     Ok(out)
 }
 
@@ -794,8 +805,8 @@ fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
     let scenario: BeaconsScenario = ctx.load_scenario()?;
     let checked = scenario.check(&ctx.scenario_label, ctx.runs)?;
     let per_run: Vec<Vec<Vec<SchemeStats>>> =
-        ctx.try_monte_carlo(checked.runs, checked.base_seed, |_, rng| {
-            one_run(&checked, rng)
+        ctx.try_monte_carlo(checked.runs, checked.base_seed, |i, rng| {
+            one_run(&checked, rng).map_err(|e| SimError::model(format!("run {i}"), e))
         })?;
 
     let mut summary = Summary::new(
@@ -1490,6 +1501,7 @@ fn report_section(
                 sum(&|c| c.rejected).to_string(),
                 sum(&|c| c.superseded).to_string(),
                 sum(&|c| c.stale).to_string(),
+                sum(&|c| c.non_finite).to_string(),
             ]);
         }
     }
@@ -1501,6 +1513,7 @@ fn report_section(
             "rejected",
             "superseded",
             "stale",
+            "non-finite (dropped)",
         ],
         &rows,
     ));

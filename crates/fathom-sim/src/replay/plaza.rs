@@ -625,6 +625,9 @@ pub struct MethodRun {
     /// Ranges superseded or stale (SC / SI: an older sample of the same beacon in the
     /// same epoch window).
     pub dropped: usize,
+    /// Ranges dropped because the value or the stamp is not finite (never applied;
+    /// the filter's bad-data policy, `fathom_estimators` crate docs "Bad input").
+    pub non_finite: usize,
     /// Ranges applied with an inflated variance (Huber).
     pub downweighted: usize,
     /// Covariance inflations after runs of rejected or down-weighted ranges.
@@ -660,6 +663,7 @@ fn finish(
         accepted: 0,
         rejected: 0,
         dropped: 0,
+        non_finite: 0,
         downweighted: 0,
         recoveries: 0,
         decisions: Vec::new(),
@@ -826,6 +830,7 @@ fn run_filter<const N: usize>(
             Disposition::Accepted => run.accepted += 1,
             Disposition::Rejected => run.rejected += 1,
             Disposition::Stale | Disposition::Superseded => run.dropped += 1,
+            Disposition::NonFinite => run.non_finite += 1,
         }
         if let Some(slot) = decisions.get_mut(d.tag) {
             *slot = Some(d.disposition);

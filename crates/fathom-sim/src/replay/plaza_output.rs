@@ -41,6 +41,7 @@ fn decision_word(d: Option<Disposition>) -> &'static str {
         Some(Disposition::Rejected) => "rejected",
         Some(Disposition::Stale) => "stale",
         Some(Disposition::Superseded) => "superseded",
+        Some(Disposition::NonFinite) => "non-finite",
     }
 }
 

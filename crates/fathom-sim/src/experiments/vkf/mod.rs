@@ -112,6 +112,7 @@ fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
 
     let runs: Vec<RunOutput> = ctx.try_monte_carlo(c.runs, c.base_seed, |i, rng| {
         sim::one_run(&c, &shared, &c.dvl, rng, i == 0)
+            .map_err(|e| SimError::model(format!("run {i}"), e))
     })?;
     let literal: Vec<RunOutput> = if c.literal_bias_runs > 0 {
         ctx.try_monte_carlo(c.literal_bias_runs, c.base_seed, |_, rng| {

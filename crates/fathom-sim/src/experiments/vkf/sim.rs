@@ -182,7 +182,8 @@ fn horizontal_offset(from: &Geodetic, to: &Geodetic) -> Vector3<f64> {
 /// DVL configurations with the same stream see the same noise.
 ///
 /// # Errors
-/// [`SimError::Model`] naming the failing component.
+/// [`SimError::Model`] naming the failing component and, through the filter's error
+/// or the context, the time stamp (the caller adds the run index).
 pub fn one_run(
     c: &Checked,
     sh: &Shared,
@@ -259,7 +260,8 @@ pub fn one_run(
 
             // PINS and the 9-state filters' input.
             let v_old = pins.state().vel_in_nav;
-            pins.step(&meas).map_err(model_err("PINS"))?;
+            pins.step(&meas)
+                .map_err(|e| SimError::model(format!("PINS at t = {t} s"), e))?;
             let dv_nav = pins.state().vel_in_nav - v_old;
             let c_nb = *pins.state().nav_from_body.to_rotation_matrix().matrix();
             for f in &mut nav {
@@ -269,7 +271,9 @@ pub fn one_run(
 
             // ESKF INS with the fed-back IMU error estimates.
             let corrected = ImuIncrement::new(inc.dt, dth - est_bg * inc.dt, dv - est_ba * inc.dt);
-            eskf_ins.step(&corrected).map_err(model_err("ESKF INS"))?;
+            eskf_ins
+                .step(&corrected)
+                .map_err(|e| SimError::model(format!("ESKF INS at t = {t} s"), e))?;
             f_sum += corrected.delta_v;
 
             if k % c.cov_every == 0 {
@@ -361,7 +365,7 @@ pub fn one_run(
             };
             eskf_ins
                 .set_state(em::correct_state(&st, &err))
-                .map_err(model_err("ESKF feedback"))?;
+                .map_err(|e| SimError::model(format!("ESKF feedback at t = {t} s"), e))?;
             est_ba += dx.fixed_rows::<3>(es::ACCEL_BIAS);
             est_bg += dx.fixed_rows::<3>(es::GYRO_BIAS);
 
