@@ -785,7 +785,9 @@ fn method(scheme: UpdateScheme, case: &str) -> String {
 
 fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
     let scenario: BeaconsScenario = ctx.load_scenario()?;
-    let checked = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    let mut checked = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    // `fathom run --seed`: the batch and the figure run below use this seed.
+    checked.base_seed = ctx.seed_or(checked.base_seed);
     let per_run: Vec<Vec<Vec<SchemeStats>>> =
         ctx.try_monte_carlo(checked.runs, checked.base_seed, |_, rng| {
             one_run(&checked, rng)
