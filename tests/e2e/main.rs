@@ -8,7 +8,9 @@ mod support;
 
 mod beacons;
 mod cli;
+mod determinism;
 mod fusion;
 mod noise;
 mod plaza;
+mod user_scenarios;
 mod vkf;

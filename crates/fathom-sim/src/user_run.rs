@@ -332,7 +332,10 @@ pub fn run_scenario_with_progress(
         ));
     }
     crate::output::write_text(out_dir.join("scenario.toml"), &text)?;
-    crate::output::write_text(out_dir.join("scenario.resolved.toml"), &resolved_toml)?;
+    crate::output::write_text(
+        out_dir.join("scenario.resolved.toml"),
+        &(resolved_header(exp.name, options.runs) + &resolved_toml),
+    )?;
     let info = RunInfo {
         fathom_version: env!("CARGO_PKG_VERSION").to_string(),
         experiment: exp.name.to_string(),
@@ -347,6 +350,19 @@ pub fn run_scenario_with_progress(
         .map_err(|e| SimError::invalid_argument("run_info.json", e.to_string()))?;
     crate::output::write_text(out_dir.join(RUN_INFO_FILE), &(json + "\n"))?;
     Ok((result, info))
+}
+
+/// The comment lines written above the resolved scenario: where it comes from and the
+/// command that reproduces the run (`--runs` is not folded into the file, since some
+/// experiments derive auxiliary run counts from it).
+fn resolved_header(experiment: &str, runs: Option<usize>) -> String {
+    let runs = runs.map(|n| format!(" --runs {n}")).unwrap_or_default();
+    format!(
+        "# Resolved `{experiment}` scenario written by `fathom run` (fathom {}): defaults filled\n\
+         # in, base_seed = the seed actually used. Reproduce the run with\n\
+         #   fathom run scenario.resolved.toml{runs}\n\n",
+        env!("CARGO_PKG_VERSION")
+    )
 }
 
 /// The top-level `base_seed` of a resolved scenario, if it has one.
