@@ -1,33 +1,72 @@
-//! The README's walkthrough through the real `fathom` binary: copy
-//! `scenarios/beacons.toml`, move the beacons and change their number (6, 3, 1), run
-//! `fathom run`, get results and plots; bad edits give one-line errors with exit 2.
+//! The README's walkthrough through the real `fathom` binary: check the preset, copy
+//! `scenarios/beacons.toml`, replace the beacons by the README's six (and by 3 and 1),
+//! run `fathom run`, get results and plots; bad edits give one-line errors with
+//! exit 2. (The mission is shortened to 30 s and the runs to 6 to stay fast.)
 
 use std::path::Path;
 
-use crate::support::{fathom, preset, read, scratch};
+use crate::support::{fathom, preset, read, repo_root, scratch};
 
-/// Six beacons on a 20 m hexagon, alternating between the surface and 40 m depth.
-const SIX: &str = "positions = [[20.0, 0.0, 0.0], [10.0, 17.3, 40.0], [-10.0, 17.3, 0.0], \
-                   [-20.0, 0.0, 40.0], [-10.0, -17.3, 0.0], [10.0, -17.3, 40.0]]";
+/// The README's six-beacon `[beacons]` table, taken from README.md itself (the
+/// indented ```toml block starting with `[beacons]`), so the walkthrough cannot drift.
+fn readme_beacons_table() -> String {
+    let readme = std::fs::read_to_string(repo_root().join("README.md")).unwrap();
+    for cmd in [
+        "fathom check scenarios/beacons.toml",
+        "cp scenarios/beacons.toml my_beacons.toml",
+        "fathom run my_beacons.toml --runs 20 --out out/my_beacons",
+        "cargo build --release -p fathom-cli",
+    ] {
+        assert!(readme.contains(cmd), "README lost the step `{cmd}`");
+    }
+    let lines: Vec<&str> = readme.lines().collect();
+    let start = (0..lines.len() - 1)
+        .find(|&i| lines[i].trim() == "```toml" && lines[i + 1].trim() == "[beacons]")
+        .expect("README has a ```toml block with the [beacons] table");
+    let indent = lines[start].len() - lines[start].trim_start().len();
+    let mut table = String::new();
+    for line in &lines[start + 1..] {
+        if line.trim() == "```" {
+            return table;
+        }
+        table.push_str(line.get(indent..).unwrap_or(line.trim_start()));
+        table.push('\n');
+    }
+    panic!("unterminated ```toml block in README.md")
+}
+
 /// Three beacons, non-collinear, one deep.
 const THREE: &str = "positions = [[20.0, 0.0, 0.0], [-10.0, 17.3, 40.0], [-10.0, -17.3, 0.0]]";
 
-/// The preset with `positions` replaced, on a 30 s mission (fewer outliers to match)
-/// and 6 runs: what a user's edit looks like, made fast.
-fn edited(positions: &str) -> String {
+/// The preset with its `[beacons]` table (header and `positions` line) replaced by
+/// `table`, on a 30 s mission (fewer outliers to match): a user's edit, made fast.
+fn edited_table(table: &str) -> String {
     let text = preset("beacons.toml");
     let line = text
         .lines()
         .find(|l| l.starts_with("positions = "))
         .expect("the preset has a positions line");
-    text.replace(line, positions)
+    let old = format!("[beacons]\n{line}\n");
+    assert!(text.contains(&old), "the preset's [beacons] table moved");
+    text.replace(&old, table)
         .replace("duration_s = 180.0", "duration_s = 30.0")
         .replace("outlier_count = 276", "outlier_count = 40")
+}
+
+/// [`edited_table`] with a one-line `positions = ...`.
+fn edited(positions: &str) -> String {
+    edited_table(&format!("[beacons]\n{positions}\n"))
 }
 
 /// Runs `fathom check` and `fathom run` on `text` as `my_beacons.toml` and checks the
 /// outputs of a `k`-beacon run.
 fn walkthrough(tag: &str, text: &str, k: usize) {
+    let preset_check = fathom(&repo_root(), &["check", "scenarios/beacons.toml"]);
+    assert_eq!(preset_check.code, 0, "{preset_check:?}");
+    assert!(
+        preset_check.stdout.contains("[beacons]"),
+        "{preset_check:?}"
+    );
     let dir = scratch(tag);
     std::fs::write(dir.join("my_beacons.toml"), text).unwrap();
     let check = fathom(&dir, &["check", "my_beacons.toml"]);
@@ -122,7 +161,11 @@ fn sane_results(out: &Path, k: usize) {
 
 #[test]
 fn six_beacons_from_an_edited_preset_run_end_to_end() {
-    walkthrough("user-six-beacons", &edited(SIX), 6);
+    walkthrough(
+        "user-six-beacons",
+        &edited_table(&readme_beacons_table()),
+        6,
+    );
 }
 
 #[test]
