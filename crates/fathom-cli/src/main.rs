@@ -221,7 +221,7 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
             .map_err(Failure::Run)?,
     };
     let bar = progress_bar();
-    let hook = bar.as_ref().map(progress_hook);
+    let hook = bar.as_ref().map(|b| progress_hook(b, true));
     let outcome = run_scenario_with_progress(&options, &registry, hook);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
@@ -275,12 +275,12 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
 }
 
 /// The progress bar of `fathom run` on standard error; `None` (nothing drawn) when
-/// standard error is not a terminal.
+/// standard error is not a terminal. It stays hidden until the first batch starts.
 fn progress_bar() -> Option<ProgressBar> {
     if !std::io::stderr().is_terminal() {
         return None;
     }
-    let bar = ProgressBar::with_draw_target(Some(0), ProgressDrawTarget::stderr());
+    let bar = ProgressBar::hidden();
     let style = ProgressStyle::with_template(
         "{msg:.bold} [{bar:30}] {pos}/{len} runs, {per_sec}, elapsed {elapsed}, ETA {eta}",
     )
@@ -290,14 +290,18 @@ fn progress_bar() -> Option<ProgressBar> {
     Some(bar)
 }
 
-/// The library's progress hook drawing on `bar`: one bar per Monte Carlo batch.
-fn progress_hook(bar: &ProgressBar) -> Progress {
+/// The library's progress hook drawing on `bar`: one bar per Monte Carlo batch. With
+/// `draw`, the first batch attaches the bar to standard error.
+fn progress_hook(bar: &ProgressBar, draw: bool) -> Progress {
     let bar = bar.clone();
     Progress::new(move |event| match event {
         ProgressEvent::BatchStarted { label, total } => {
             bar.reset();
             bar.set_length(total as u64);
             bar.set_message(label);
+            if draw && bar.is_hidden() {
+                bar.set_draw_target(ProgressDrawTarget::stderr());
+            }
         }
         ProgressEvent::RunFinished { .. } => bar.inc(1),
         ProgressEvent::BatchFinished { .. } => {}
@@ -445,7 +449,7 @@ mod tests {
     #[test]
     fn progress_hook_counts_runs_per_batch() {
         let bar = ProgressBar::hidden();
-        let hook = progress_hook(&bar);
+        let hook = progress_hook(&bar, false);
         hook.report(ProgressEvent::BatchStarted {
             label: "a".into(),
             total: 3,
