@@ -13,8 +13,8 @@
 //! `fathom-out/<experiment>`). `--runs` overrides the scenario's Monte Carlo count,
 //! `--seed` its `base_seed` (the seed actually used is recorded in
 //! `scenario.resolved.toml`, `run_info.json` and `summary.json`, so the resolved file
-//! reproduces the run; a deterministic experiment such as `plaza` has no seed and
-//! refuses `--seed` with exit code 2). The same scenario and seed give a byte-identical
+//! reproduces the run with the same `--runs`; a deterministic experiment such as
+//! `plaza` has no seed and refuses `--seed` with exit code 2). The same scenario and seed give a byte-identical
 //! `summary.json` for any `--threads`. While it runs, a progress bar on standard error
 //! shows the current Monte Carlo batch, runs done, rate and ETA; it is not drawn when
 //! standard error is not a terminal (pipes, CI logs). `check` parses and validates a
