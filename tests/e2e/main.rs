@@ -8,8 +8,10 @@ mod support;
 
 mod beacons;
 mod cli;
+mod determinism;
 mod fusion;
 mod hardening;
 mod noise;
 mod plaza;
+mod user_scenarios;
 mod vkf;

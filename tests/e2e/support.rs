@@ -1,7 +1,10 @@
 //! Helpers shared by the end-to-end tests: scratch workspaces holding modified
-//! scenario files, and running experiments through `run_paper_to`.
+//! scenario files, running experiments through `run_paper_to`, and running the real
+//! `fathom` binary.
 
 use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::OnceLock;
 
 use fathom::sim::experiment::run_paper_to;
 use fathom::sim::{PaperOptions, PaperResult, SimError};
@@ -51,4 +54,92 @@ pub fn run_experiment(
 /// The full error chain as one string (what `cargo xtask paper` prints).
 pub fn chain(e: &SimError) -> String {
     fathom::sim::error_chain(e)
+}
+
+/// The `fathom` binary, built once per test process with this test binary's profile
+/// (`cargo build --profile test --workspace --bins --tests`, or `--release` under
+/// `cargo test --release`), so the tests always run the binary of the current sources.
+/// Building the workspace's test targets too makes cargo resolve the same features as
+/// `cargo test --workspace` (dev-dependencies included): every library is then already
+/// compiled and only the binaries are linked (seconds), where `-p fathom-cli` alone
+/// would recompile ~30 dependencies with other features. `FATHOM_BIN` overrides it
+/// (an installed binary).
+pub fn fathom_bin() -> PathBuf {
+    static BIN: OnceLock<PathBuf> = OnceLock::new();
+    BIN.get_or_init(|| {
+        if let Some(path) = std::env::var_os("FATHOM_BIN") {
+            return PathBuf::from(path);
+        }
+        let exe = std::env::current_exe().unwrap();
+        // target/<profile dir>/deps/e2e-<hash>
+        let release = exe
+            .parent()
+            .and_then(Path::parent)
+            .and_then(Path::file_name)
+            .is_some_and(|n| n == "release");
+        let mut cmd = Command::new(env!("CARGO"));
+        cmd.args([
+            "build",
+            "--workspace",
+            "--bins",
+            "--tests",
+            "--message-format=json-render-diagnostics",
+        ]);
+        if release {
+            cmd.arg("--release");
+        } else {
+            cmd.args(["--profile", "test"]);
+        }
+        let out = cmd.current_dir(repo_root()).output().unwrap();
+        assert!(
+            out.status.success(),
+            "building the fathom binary failed:\n{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
+            .filter(|m| {
+                m["reason"] == "compiler-artifact"
+                    && m["target"]["name"] == "fathom"
+                    && m["target"]["kind"][0] == "bin"
+                    && m["profile"]["test"] == false
+            })
+            .find_map(|m| m["executable"].as_str().map(PathBuf::from))
+            .expect("cargo reported the fathom executable")
+    })
+    .clone()
+}
+
+/// What one `fathom` invocation did.
+#[derive(Debug)]
+pub struct Ran {
+    /// Exit code (`-1` if killed by a signal).
+    pub code: i32,
+    /// Standard output.
+    pub stdout: String,
+    /// Standard error.
+    pub stderr: String,
+}
+
+/// Runs the `fathom` binary with `args` in the directory `dir` (stdin closed; stderr is
+/// a pipe, so no progress bar is drawn).
+pub fn fathom(dir: &Path, args: &[&str]) -> Ran {
+    let out = Command::new(fathom_bin())
+        .args(args)
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .output()
+        .unwrap();
+    Ran {
+        code: out.status.code().unwrap_or(-1),
+        stdout: String::from_utf8_lossy(&out.stdout).into_owned(),
+        stderr: String::from_utf8_lossy(&out.stderr).into_owned(),
+    }
+}
+
+/// Reads `dir/file` as text.
+pub fn read(dir: &Path, file: &str) -> String {
+    std::fs::read_to_string(dir.join(file))
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", dir.join(file).display()))
 }

@@ -1,7 +1,7 @@
 //! `fathom`: the command-line tool.
 //!
 //! ```text
-//! fathom run <scenario.toml> [--runs N] [--threads T] [--out DIR]
+//! fathom run <scenario.toml> [--runs N] [--seed S] [--threads T] [--out DIR]
 //! fathom check <scenario.toml>
 //! fathom list
 //! fathom replay plaza <DIR> [--config FILE] [--out DIR]
@@ -10,8 +10,16 @@
 //! `run` runs any scenario file of a registered experiment (the file's top-level
 //! `experiment` key names it) and writes the experiment's outputs plus the scenario,
 //! its resolved form and `run_info.json` into `--out` (default
-//! `fathom-out/<experiment>`). `check` parses and validates a scenario without running
-//! it. `list` shows the experiments, estimators, update schemes and sensors.
+//! `fathom-out/<experiment>`). `--runs` overrides the scenario's Monte Carlo count,
+//! `--seed` its `base_seed` (the seed actually used is recorded in
+//! `scenario.resolved.toml`, `run_info.json` and `summary.json`, so the resolved file
+//! reproduces the run with the same `--runs`; a deterministic experiment such as
+//! `plaza` has no seed and refuses `--seed` with exit code 2). The same scenario and seed give a byte-identical
+//! `summary.json` for any `--threads`. While it runs, a progress bar on standard error
+//! shows the current Monte Carlo batch, runs done, rate and ETA; it is not drawn when
+//! standard error is not a terminal (pipes, CI logs). `check` parses and validates a
+//! scenario without running it. `list` shows the experiments, estimators, update
+//! schemes and sensors.
 //!
 //! `replay plaza` replays range-beacon localization on a recorded data set:
 //!
@@ -26,16 +34,21 @@
 //! that cannot be read or is malformed, an estimator or output error). Errors are
 //! printed as one message with their whole cause chain.
 
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
 use fathom_sim::data::plaza::{PlazaError, PlazaLog};
+use fathom_sim::progress::{Progress, ProgressEvent};
 use fathom_sim::replay::plaza::{PlazaSettings, parse_settings, replay};
 use fathom_sim::replay::plaza_output::{write_outputs, write_standalone};
-use fathom_sim::user_run::{RunOptions, check_command, check_scenario, one_line, run_scenario};
+use fathom_sim::user_run::{
+    RunOptions, check_command, check_scenario, one_line, run_scenario_with_progress,
+};
 use fathom_sim::{SimError, error_chain, experiments::registry};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 /// The built-in settings (a copy of `scenarios/plaza.toml` at build time).
 const DEFAULT_PLAZA_CONFIG: &str = include_str!("../../../scenarios/plaza.toml");
@@ -71,6 +84,9 @@ struct RunArgs {
     /// Override the scenario's Monte Carlo run count.
     #[arg(long, value_name = "N")]
     runs: Option<usize>,
+    /// Override the scenario's base seed (run i uses ChaCha stream i of it).
+    #[arg(long, value_name = "S")]
+    seed: Option<u64>,
     /// Worker threads (default: all cores; results do not depend on it).
     #[arg(long, value_name = "T")]
     threads: Option<usize>,
@@ -104,6 +120,9 @@ struct PlazaArgs {
     /// Output folder (created if needed).
     #[arg(long, value_name = "DIR", default_value = "plaza-replay")]
     out: PathBuf,
+    /// Not an option of a replay: accepted only to explain that it does not apply.
+    #[arg(long, hide = true, value_name = "S")]
+    seed: Option<String>,
 }
 
 /// A failure and its exit code.
@@ -136,6 +155,12 @@ fn load_settings(config: Option<&Path>) -> Result<(PlazaSettings, String), Failu
 }
 
 fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
+    if args.seed.is_some() {
+        return Err(Failure::Usage(anyhow!(
+            "--seed does not apply to `replay plaza`: a replay on recorded data is \
+             deterministic (no random draws, no base seed)"
+        )));
+    }
     let (settings, label) = load_settings(args.config.as_deref())?;
     let log = PlazaLog::read_dir(&args.dir, settings.range_order).map_err(|e| {
         let usage = matches!(e, PlazaError::NoFolder { .. });
@@ -190,11 +215,18 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         out_dir: args.out.clone(),
         runs: args.runs,
         threads: args.threads,
+        seed: args.seed,
         base_dir: std::env::current_dir()
             .context("cannot read the current directory")
             .map_err(Failure::Run)?,
     };
-    let (result, info) = run_scenario(&options, &registry).map_err(|e| {
+    let bar = progress_bar();
+    let hook = bar.as_ref().map(|b| progress_hook(b, true));
+    let outcome = run_scenario_with_progress(&options, &registry, hook);
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+    let (result, info) = outcome.map_err(|e| {
         let usage = matches!(e, SimError::InvalidArgument { .. });
         let e = anyhow!(one_line(&error_chain(&e)));
         if usage {
@@ -240,6 +272,40 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         result.figures.len()
     ));
     Ok(text)
+}
+
+/// The progress bar of `fathom run` on standard error; `None` (nothing drawn) when
+/// standard error is not a terminal. It stays hidden until the first batch starts.
+fn progress_bar() -> Option<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = ProgressBar::hidden();
+    let style = ProgressStyle::with_template(
+        "{msg:.bold} [{bar:30}] {pos}/{len} runs, {per_sec}, elapsed {elapsed}, ETA {eta}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar())
+    .progress_chars("=> ");
+    bar.set_style(style);
+    Some(bar)
+}
+
+/// The library's progress hook drawing on `bar`: one bar per Monte Carlo batch. With
+/// `draw`, the first batch attaches the bar to standard error.
+fn progress_hook(bar: &ProgressBar, draw: bool) -> Progress {
+    let bar = bar.clone();
+    Progress::new(move |event| match event {
+        ProgressEvent::BatchStarted { label, total } => {
+            bar.reset();
+            bar.set_length(total as u64);
+            bar.set_message(label);
+            if draw && bar.is_hidden() {
+                bar.set_draw_target(ProgressDrawTarget::stderr());
+            }
+        }
+        ProgressEvent::RunFinished { .. } => bar.inc(1),
+        ProgressEvent::BatchFinished { .. } => {}
+    })
 }
 
 fn check_cmd(args: &CheckArgs) -> Result<String, Failure> {
@@ -381,6 +447,27 @@ mod tests {
     }
 
     #[test]
+    fn progress_hook_counts_runs_per_batch() {
+        let bar = ProgressBar::hidden();
+        let hook = progress_hook(&bar, false);
+        hook.report(ProgressEvent::BatchStarted {
+            label: "a".into(),
+            total: 3,
+        });
+        for index in 0..3 {
+            hook.report(ProgressEvent::RunFinished { index });
+        }
+        assert_eq!((bar.position(), bar.length()), (3, Some(3)));
+        hook.report(ProgressEvent::BatchStarted {
+            label: "b".into(),
+            total: 5,
+        });
+        hook.report(ProgressEvent::RunFinished { index: 0 });
+        assert_eq!((bar.position(), bar.length()), (1, Some(5)));
+        assert_eq!(bar.message(), "b");
+    }
+
+    #[test]
     fn parses_replay_plaza() {
         let cli = Cli::try_parse_from([
             "fathom", "replay", "plaza", "data/p1", "--config", "c.toml", "--out", "o",
@@ -412,20 +499,26 @@ mod tests {
             "2",
             "--out",
             "o",
+            "--seed",
+            "11",
         ])
         .unwrap();
         let Command::Run(a) = cli.command else {
             panic!("not run")
         };
         assert_eq!(
-            (a.scenario, a.runs, a.threads, a.out),
+            (a.scenario, a.runs, a.threads, a.out, a.seed),
             (
                 PathBuf::from("s.toml"),
                 Some(5),
                 Some(2),
-                Some(PathBuf::from("o"))
+                Some(PathBuf::from("o")),
+                Some(11)
             )
         );
+        for bad in ["-1", "x", "1.5"] {
+            assert!(Cli::try_parse_from(["fathom", "run", "s.toml", "--seed", bad]).is_err());
+        }
         assert!(matches!(
             Cli::try_parse_from(["fathom", "check", "s.toml"])
                 .unwrap()
@@ -485,6 +578,7 @@ mod tests {
             dir: dir.join("no-such-folder"),
             config: None,
             out: dir.join("out"),
+            seed: None,
         };
         assert!(matches!(replay_plaza(&args), Err(Failure::Usage(_))));
         std::fs::create_dir_all(dir.join("empty")).unwrap();
@@ -495,6 +589,15 @@ mod tests {
         match replay_plaza(&args) {
             Err(Failure::Run(e)) => assert!(format!("{e:#}").contains("_DR.txt"), "{e:#}"),
             other => panic!("expected a run failure, got {other:?}"),
+        }
+        // A seed does not apply to a deterministic replay: a usage error, not ignored.
+        let args = PlazaArgs {
+            seed: Some("3".into()),
+            ..args
+        };
+        match replay_plaza(&args) {
+            Err(Failure::Usage(e)) => assert!(format!("{e:#}").contains("--seed"), "{e:#}"),
+            other => panic!("expected a usage error, got {other:?}"),
         }
     }
 }

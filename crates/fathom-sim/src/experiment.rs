@@ -32,6 +32,7 @@ use crate::output::{
     Summary, claims_md_table, fmt_ci, fmt_num, fmt_opt, holds_word, md_table, read_summary_json,
     summary_md_table, text_table, write_summary_json, write_text,
 };
+use crate::progress::Progress;
 
 /// Decimals used for numbers in the printed and Markdown tables.
 pub const TABLE_DECIMALS: usize = 4;
@@ -66,6 +67,14 @@ pub struct ExperimentContext {
     pub runs: Option<usize>,
     /// `--threads` (number of worker threads; `None` = all cores).
     pub threads: Option<usize>,
+    /// `--seed` override of the scenario's `base_seed` (`fathom run --seed S`); `None`
+    /// keeps the scenario's. Every experiment reads its base seed through
+    /// [`ExperimentContext::seed_or`], so the main batch, auxiliary batches and the
+    /// figure runs all follow it.
+    pub seed: Option<u64>,
+    /// Optional progress hook told about every Monte Carlo batch and run (the `fathom`
+    /// binary draws a progress bar with it); it cannot change any result.
+    pub progress: Option<Progress>,
 }
 
 impl ExperimentContext {
@@ -79,6 +88,11 @@ impl ExperimentContext {
         self.runs.unwrap_or(scenario_default)
     }
 
+    /// The base seed: the `--seed` override if given, else `scenario_base_seed`.
+    pub fn seed_or(&self, scenario_base_seed: u64) -> u64 {
+        self.seed.unwrap_or(scenario_base_seed)
+    }
+
     /// Load the scenario file into `T` (errors name the file as registered, e.g.
     /// `scenarios/noise.toml`).
     ///
@@ -90,16 +104,25 @@ impl ExperimentContext {
         crate::scenario::parse_toml(&text, &self.scenario_label)
     }
 
-    /// [`crate::montecarlo::run_monte_carlo`] with this context's thread setting.
+    /// [`crate::montecarlo::run_monte_carlo`] with this context's thread setting,
+    /// reporting to the progress hook (if any) under the experiment's name.
     pub fn monte_carlo<T, F>(&self, runs: usize, base_seed: u64, f: F) -> Vec<T>
     where
         T: Send,
         F: Fn(usize, &mut ChaCha8Rng) -> T + Sync,
     {
-        crate::montecarlo::run_monte_carlo(runs, base_seed, self.threads, f)
+        crate::montecarlo::run_monte_carlo_with_progress(
+            runs,
+            base_seed,
+            self.threads,
+            self.progress.as_ref(),
+            &self.name,
+            f,
+        )
     }
 
-    /// [`crate::montecarlo::try_run_monte_carlo`] with this context's thread setting.
+    /// [`crate::montecarlo::try_run_monte_carlo`] with this context's thread setting,
+    /// reporting to the progress hook (if any) under the experiment's name.
     ///
     /// # Errors
     /// The error of the first (by run index) failing run.
@@ -109,7 +132,34 @@ impl ExperimentContext {
         E: Send,
         F: Fn(usize, &mut ChaCha8Rng) -> Result<T, E> + Sync,
     {
-        crate::montecarlo::try_run_monte_carlo(runs, base_seed, self.threads, f)
+        self.try_monte_carlo_labeled(&self.name, runs, base_seed, f)
+    }
+
+    /// [`ExperimentContext::try_monte_carlo`] with the batch `label` shown by the
+    /// progress hook (for experiments running several batches).
+    ///
+    /// # Errors
+    /// The error of the first (by run index) failing run.
+    pub fn try_monte_carlo_labeled<T, E, F>(
+        &self,
+        label: &str,
+        runs: usize,
+        base_seed: u64,
+        f: F,
+    ) -> Result<Vec<T>, E>
+    where
+        T: Send,
+        E: Send,
+        F: Fn(usize, &mut ChaCha8Rng) -> Result<T, E> + Sync,
+    {
+        crate::montecarlo::try_run_monte_carlo_with_progress(
+            runs,
+            base_seed,
+            self.threads,
+            self.progress.as_ref(),
+            label,
+            f,
+        )
     }
 }
 
@@ -329,6 +379,9 @@ fn run_one(options: &PaperOptions, exp: &Experiment) -> Result<ExperimentResult,
         out_dir: out_dir.clone(),
         runs: options.runs,
         threads: options.threads,
+        // `cargo xtask paper` always uses the scenario seeds.
+        seed: None,
+        progress: None,
     };
     run_in_context(exp, &ctx)
 }

@@ -38,6 +38,7 @@
 //! - [`scenario`]: TOML scenario loading with file / key / line error messages;
 //! - [`montecarlo`]: [`run_monte_carlo`](montecarlo::run_monte_carlo) and its seeding rule;
 //! - [`output`]: [`Summary`](output::Summary) (`summary.json`), CSV and Markdown helpers;
+//! - [`progress`]: the progress hook of long Monte Carlo batches (the library never prints);
 //! - [`plot`]: SVG line, plan-view, histogram, heat-map and sample-time figures;
 //! - [`experiment`]: the [`Experiment`] registry type and
 //!   [`run_paper`];
@@ -50,6 +51,7 @@ pub mod experiments;
 pub mod montecarlo;
 pub mod output;
 pub mod plot;
+pub mod progress;
 pub mod replay;
 pub mod scenario;
 #[cfg(test)]

@@ -8,10 +8,15 @@
 //! reproduced alone with [`run_rng`]. Results depend only on `(base_seed, i)`, never on
 //! the number of threads or the scheduling: the same inputs give bit-identical output
 //! with 1 or many threads.
+//!
+//! The `*_with_progress` variants also report the batch and every finished run to a
+//! [`Progress`] hook (see [`crate::progress`]); the hook cannot change the results.
 
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
+
+use crate::progress::{Progress, ProgressEvent};
 
 /// The RNG of run `run_index` in a batch with `base_seed`:
 /// `ChaCha8Rng::seed_from_u64(base_seed)` with `set_stream(run_index)`.
@@ -33,16 +38,51 @@ where
     T: Send,
     F: Fn(usize, &mut ChaCha8Rng) -> T + Sync,
 {
+    run_monte_carlo_with_progress(runs, base_seed, threads, None, "", f)
+}
+
+/// [`run_monte_carlo`] reporting to `progress` (if any): the batch `label` and its size
+/// first, then every finished run (from the worker thread that ran it), then the end of
+/// the batch (see [`crate::progress`]). The hook only observes: results are the same
+/// with or without it.
+pub fn run_monte_carlo_with_progress<T, F>(
+    runs: usize,
+    base_seed: u64,
+    threads: Option<usize>,
+    progress: Option<&Progress>,
+    label: &str,
+    f: F,
+) -> Vec<T>
+where
+    T: Send,
+    F: Fn(usize, &mut ChaCha8Rng) -> T + Sync,
+{
+    if let Some(p) = progress {
+        p.report(ProgressEvent::BatchStarted {
+            label: label.to_string(),
+            total: runs,
+        });
+    }
     let work = || {
         (0..runs)
             .into_par_iter()
             .map(|i| {
                 let mut rng = run_rng(base_seed, i);
-                f(i, &mut rng)
+                let out = f(i, &mut rng);
+                if let Some(p) = progress {
+                    p.report(ProgressEvent::RunFinished { index: i });
+                }
+                out
             })
             .collect::<Vec<T>>()
     };
-    in_pool(threads, work)
+    let results = in_pool(threads, work);
+    if let Some(p) = progress {
+        p.report(ProgressEvent::BatchFinished {
+            label: label.to_string(),
+        });
+    }
+    results
 }
 
 /// Like [`run_monte_carlo`] for a fallible run function: all runs are executed, and the
@@ -62,7 +102,28 @@ where
     E: Send,
     F: Fn(usize, &mut ChaCha8Rng) -> Result<T, E> + Sync,
 {
-    run_monte_carlo(runs, base_seed, threads, f)
+    try_run_monte_carlo_with_progress(runs, base_seed, threads, None, "", f)
+}
+
+/// [`try_run_monte_carlo`] reporting to `progress` as
+/// [`run_monte_carlo_with_progress`] (a failed run counts as finished).
+///
+/// # Errors
+/// The error of the first (by run index) failing run.
+pub fn try_run_monte_carlo_with_progress<T, E, F>(
+    runs: usize,
+    base_seed: u64,
+    threads: Option<usize>,
+    progress: Option<&Progress>,
+    label: &str,
+    f: F,
+) -> Result<Vec<T>, E>
+where
+    T: Send,
+    E: Send,
+    F: Fn(usize, &mut ChaCha8Rng) -> Result<T, E> + Sync,
+{
+    run_monte_carlo_with_progress(runs, base_seed, threads, progress, label, f)
         .into_iter()
         .collect()
 }
@@ -81,6 +142,7 @@ fn in_pool<R: Send>(threads: Option<usize>, work: impl FnOnce() -> R + Send) -> 
 mod tests {
     use super::*;
     use rand::Rng;
+    use std::sync::{Arc, Mutex};
 
     fn draw(i: usize, rng: &mut ChaCha8Rng) -> (usize, Vec<u64>, f64) {
         let v: Vec<u64> = (0..50).map(|_| rng.random::<u64>()).collect();
@@ -135,5 +197,65 @@ mod tests {
         assert_eq!(r.unwrap_err(), "run 22");
         let ok: Result<Vec<usize>, String> = try_run_monte_carlo(10, 3, None, |i, _| Ok(i * 2));
         assert_eq!(ok.unwrap(), (0..10).map(|i| i * 2).collect::<Vec<_>>());
+    }
+
+    /// A hook recording every event (thread-safe).
+    fn recorder() -> (Progress, Arc<Mutex<Vec<ProgressEvent>>>) {
+        let seen = Arc::new(Mutex::new(Vec::new()));
+        let sink = Arc::clone(&seen);
+        (Progress::new(move |e| sink.lock().unwrap().push(e)), seen)
+    }
+
+    #[test]
+    fn progress_counts_every_run_exactly_once_and_changes_nothing() {
+        for threads in [Some(1), Some(3), None] {
+            let (hook, seen) = recorder();
+            let with = run_monte_carlo_with_progress(57, 9, threads, Some(&hook), "batch", draw);
+            let without = run_monte_carlo(57, 9, threads, draw);
+            assert_eq!(with, without, "{threads:?}");
+            let ev = seen.lock().unwrap().clone();
+            assert_eq!(ev.len(), 57 + 2, "{threads:?}");
+            assert_eq!(
+                ev[0],
+                ProgressEvent::BatchStarted {
+                    label: "batch".into(),
+                    total: 57
+                }
+            );
+            assert_eq!(
+                ev[58],
+                ProgressEvent::BatchFinished {
+                    label: "batch".into()
+                }
+            );
+            let mut indices: Vec<usize> = ev[1..58]
+                .iter()
+                .map(|e| match e {
+                    ProgressEvent::RunFinished { index } => *index,
+                    other => panic!("unexpected {other:?}"),
+                })
+                .collect();
+            indices.sort_unstable();
+            assert_eq!(indices, (0..57).collect::<Vec<_>>());
+        }
+    }
+
+    #[test]
+    fn progress_counts_failed_runs_and_keeps_the_first_error() {
+        let (hook, seen) = recorder();
+        let f = |i: usize, _: &mut ChaCha8Rng| {
+            if i == 4 || i == 7 { Err(i) } else { Ok(i) }
+        };
+        let r: Result<Vec<usize>, usize> =
+            try_run_monte_carlo_with_progress(12, 1, Some(2), Some(&hook), "x", f);
+        assert_eq!(r, Err(4));
+        assert_eq!(r, try_run_monte_carlo(12, 1, Some(2), f));
+        let finished = seen
+            .lock()
+            .unwrap()
+            .iter()
+            .filter(|e| matches!(e, ProgressEvent::RunFinished { .. }))
+            .count();
+        assert_eq!(finished, 12);
     }
 }

@@ -15,6 +15,7 @@ use serde::{Deserialize, Serialize};
 use crate::error::SimError;
 use crate::experiment::{Experiment, ExperimentContext, ExperimentResult, run_in_context};
 use crate::experiments;
+use crate::progress::Progress;
 
 /// Marker file written by [`run_scenario`] into its output directory.
 pub const RUN_INFO_FILE: &str = "run_info.json";
@@ -192,6 +193,18 @@ pub struct RunInfo {
     pub runs: Option<usize>,
     /// `--threads`, if given.
     pub threads: Option<usize>,
+    /// `--seed` override, if given.
+    #[serde(default)]
+    pub seed: Option<u64>,
+    /// The base seed the runs actually used (the scenario's `base_seed`, or `--seed`);
+    /// `None` for a deterministic experiment (no `base_seed`, e.g. `plaza`). The same
+    /// value is in `scenario.resolved.toml` and `summary.json`.
+    #[serde(default)]
+    pub base_seed: Option<u64>,
+    /// Wall-clock time of the experiment, s (kept here, not in `summary.json`, which
+    /// is byte-identical for the same scenario and seed).
+    #[serde(default)]
+    pub elapsed_s: f64,
 }
 
 /// Options of [`run_scenario`].
@@ -205,6 +218,9 @@ pub struct RunOptions {
     pub runs: Option<usize>,
     /// Worker threads (>= 1; `None` = all cores).
     pub threads: Option<usize>,
+    /// Override of the scenario's `base_seed` (at most `i64::MAX`, the largest TOML
+    /// integer); an error for a deterministic experiment without one.
+    pub seed: Option<u64>,
     /// Where relative data folders of a scenario are looked up (the experiment's
     /// `workspace_root`; `fathom run` passes the current directory).
     pub base_dir: PathBuf,
@@ -212,20 +228,45 @@ pub struct RunOptions {
 
 /// Check, then run a user's scenario file with its experiment; writes the experiment's
 /// outputs (figures, CSV, `summary.json`, `report.md`) plus `scenario.toml` (the file
-/// as given), `scenario.resolved.toml` (defaults filled in) and `run_info.json` into
-/// the output directory.
+/// as given), `scenario.resolved.toml` (defaults filled in, `base_seed` = the seed
+/// actually used, so running it reproduces the results) and `run_info.json` into the
+/// output directory.
 ///
 /// A non-empty output directory is only reused when it holds a `run_info.json` of an
 /// earlier `fathom run` (its stale outputs are then removed), so `--out .` cannot
 /// delete unrelated files.
 ///
 /// # Errors
-/// Check errors as [`check_scenario`], bad `--runs` / `--threads`, a refused output
-/// directory, the experiment's failure, or I/O errors.
+/// Check errors as [`check_scenario`], bad `--runs` / `--threads` / `--seed`
+/// ([`SimError::InvalidArgument`], also for `--seed` on a deterministic experiment), a
+/// refused output directory, the experiment's failure, or I/O errors.
 pub fn run_scenario(
     options: &RunOptions,
     registry: &[Experiment],
 ) -> Result<(ExperimentResult, RunInfo), SimError> {
+    run_scenario_with_progress(options, registry, None)
+}
+
+/// [`run_scenario`] reporting the Monte Carlo batches and runs to `progress` (see
+/// [`crate::progress`]); the results do not depend on it.
+///
+/// # Errors
+/// As [`run_scenario`].
+pub fn run_scenario_with_progress(
+    options: &RunOptions,
+    registry: &[Experiment],
+    progress: Option<Progress>,
+) -> Result<(ExperimentResult, RunInfo), SimError> {
+    if options.seed.is_some_and(|s| i64::try_from(s).is_err()) {
+        return Err(SimError::invalid_argument(
+            "--seed",
+            format!(
+                "must be at most {} (the largest TOML integer, so that the resolved scenario \
+                 can record it)",
+                i64::MAX
+            ),
+        ));
+    }
     if options.runs == Some(0) {
         return Err(SimError::invalid_argument("--runs", "must be at least 1"));
     }
@@ -243,6 +284,25 @@ pub fn run_scenario(
         .iter()
         .find(|e| e.name == checked.experiment)
         .ok_or_else(|| SimError::invalid(&label, "experiment", "not registered"))?;
+    let (resolved_toml, base_seed) = match options.seed {
+        None => {
+            let seed = top_level_base_seed(&checked.resolved_toml);
+            (checked.resolved_toml.clone(), seed)
+        }
+        Some(seed) => {
+            let text = with_base_seed(&checked.resolved_toml, seed).ok_or_else(|| {
+                SimError::invalid_argument(
+                    "--seed",
+                    format!(
+                        "experiment `{}` is deterministic (its scenario has no `base_seed`), \
+                         so there is no seed to set; run it without --seed",
+                        exp.name
+                    ),
+                )
+            })?;
+            (text, Some(seed))
+        }
+    };
     let out_dir = options
         .out_dir
         .clone()
@@ -256,12 +316,25 @@ pub fn run_scenario(
         out_dir: out_dir.clone(),
         runs: options.runs,
         threads: options.threads,
+        seed: options.seed,
+        progress,
     };
     let result = run_in_context(exp, &ctx)?;
+    if let Some(seed) = base_seed
+        && result.summary.base_seed != seed
+    {
+        return Err(SimError::invalid_argument(
+            format!("summary of experiment `{}`", exp.name),
+            format!(
+                "records base seed {}, but the run was asked to use {seed}",
+                result.summary.base_seed
+            ),
+        ));
+    }
     crate::output::write_text(out_dir.join("scenario.toml"), &text)?;
     crate::output::write_text(
         out_dir.join("scenario.resolved.toml"),
-        &checked.resolved_toml,
+        &(resolved_header(exp.name, options.runs) + &resolved_toml),
     )?;
     let info = RunInfo {
         fathom_version: env!("CARGO_PKG_VERSION").to_string(),
@@ -269,11 +342,62 @@ pub fn run_scenario(
         scenario: label,
         runs: options.runs,
         threads: options.threads,
+        seed: options.seed,
+        base_seed,
+        elapsed_s: result.elapsed.as_secs_f64(),
     };
     let json = serde_json::to_string_pretty(&info)
         .map_err(|e| SimError::invalid_argument("run_info.json", e.to_string()))?;
     crate::output::write_text(out_dir.join(RUN_INFO_FILE), &(json + "\n"))?;
     Ok((result, info))
+}
+
+/// The comment lines written above the resolved scenario: where it comes from and the
+/// command that reproduces the run (`--runs` is not folded into the file, since some
+/// experiments derive auxiliary run counts from it).
+fn resolved_header(experiment: &str, runs: Option<usize>) -> String {
+    let runs = runs.map(|n| format!(" --runs {n}")).unwrap_or_default();
+    format!(
+        "# Resolved `{experiment}` scenario written by `fathom run` (fathom {}): defaults filled\n\
+         # in, base_seed = the seed actually used. Reproduce the run with\n\
+         #   fathom run scenario.resolved.toml{runs}\n\n",
+        env!("CARGO_PKG_VERSION")
+    )
+}
+
+/// The top-level `base_seed` of a resolved scenario, if it has one.
+fn top_level_base_seed(resolved_toml: &str) -> Option<u64> {
+    let table: toml::Table = toml::from_str(resolved_toml).ok()?;
+    table
+        .get("base_seed")?
+        .as_integer()
+        .and_then(|v| u64::try_from(v).ok())
+}
+
+/// `resolved_toml` (as written by an experiment's check: top-level keys before the
+/// first table header) with its top-level `base_seed` set to `seed`; `None` when it
+/// has no top-level `base_seed` (a deterministic experiment).
+fn with_base_seed(resolved_toml: &str, seed: u64) -> Option<String> {
+    top_level_base_seed(resolved_toml)?;
+    let mut out = String::with_capacity(resolved_toml.len() + 8);
+    let mut replaced = false;
+    let mut in_top_level = true;
+    for line in resolved_toml.split_inclusive('\n') {
+        let trimmed = line.trim_start();
+        if trimmed.starts_with('[') {
+            in_top_level = false;
+        }
+        let is_key = trimmed
+            .strip_prefix("base_seed")
+            .is_some_and(|rest| rest.trim_start().starts_with('='));
+        if in_top_level && !replaced && is_key {
+            out.push_str(&format!("base_seed = {seed}\n"));
+            replaced = true;
+        } else {
+            out.push_str(line);
+        }
+    }
+    (replaced && top_level_base_seed(&out) == Some(seed)).then_some(out)
 }
 
 /// Create `dir`, or accept it if empty or made by an earlier `fathom run`; then remove
@@ -330,6 +454,67 @@ mod tests {
             let again = check_scenario_text(&c.resolved_toml, "resolved", &reg).unwrap();
             assert_eq!(again.resolved_toml, c.resolved_toml);
         }
+    }
+
+    #[test]
+    fn base_seed_is_replaced_only_at_top_level() {
+        let text = "experiment = \"x\"\nruns = 3\nbase_seed = 7\n\n[a]\nbase_seed = 9\n";
+        let out = with_base_seed(text, 42).unwrap();
+        assert_eq!(
+            out,
+            "experiment = \"x\"\nruns = 3\nbase_seed = 42\n\n[a]\nbase_seed = 9\n"
+        );
+        assert_eq!(top_level_base_seed(&out), Some(42));
+        assert_eq!(top_level_base_seed(text), Some(7));
+        // No top-level seed (a deterministic experiment): nothing to set.
+        assert_eq!(with_base_seed("runs = 3\n[a]\nbase_seed = 9\n", 1), None);
+        assert_eq!(top_level_base_seed("runs = 3\n[a]\nbase_seed = 9\n"), None);
+    }
+
+    #[test]
+    fn every_seeded_preset_resolves_with_a_new_seed() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let reg = experiments::registry();
+        for exp in &reg {
+            let c = check_scenario(&root.join(exp.default_scenario), &reg).unwrap();
+            match with_base_seed(&c.resolved_toml, 123_456) {
+                Some(text) => {
+                    // Still a valid scenario of the same experiment, now with the seed.
+                    let again = check_scenario_text(&text, "resolved", &reg).unwrap();
+                    assert_eq!(top_level_base_seed(&again.resolved_toml), Some(123_456));
+                }
+                None => assert_eq!(exp.name, "plaza", "only plaza is deterministic"),
+            }
+        }
+    }
+
+    #[test]
+    fn seed_on_a_deterministic_experiment_and_huge_seeds_are_usage_errors() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+        let out = std::env::temp_dir().join(format!("fathom-sim-seed-{}", std::process::id()));
+        let options = RunOptions {
+            scenario: root.join("scenarios/plaza.toml"),
+            out_dir: Some(out.clone()),
+            runs: None,
+            threads: None,
+            seed: Some(5),
+            base_dir: root.clone(),
+        };
+        let reg = experiments::registry();
+        let e = run_scenario(&options, &reg).unwrap_err();
+        assert!(matches!(e, SimError::InvalidArgument { .. }), "{e}");
+        let s = e.to_string();
+        assert!(s.contains("--seed") && s.contains("deterministic"), "{s}");
+        // Refused before anything is written.
+        assert!(!out.exists());
+        let huge = RunOptions {
+            scenario: root.join("scenarios/beacons.toml"),
+            seed: Some(u64::MAX),
+            ..options
+        };
+        let s = run_scenario(&huge, &reg).unwrap_err().to_string();
+        assert!(s.contains("--seed") && s.contains("at most"), "{s}");
+        assert!(!out.exists());
     }
 
     #[test]

@@ -11,6 +11,13 @@
 //! per run its mean, population std, max and RMSE are taken, then averaged over runs
 //! with 95 % CIs. Outlier recall = injected outliers rejected by the gate / injected.
 //!
+//! The number of beacons `K` is the length of the scenario's `beacons.positions`
+//! (the paper has 4; any `K >= 1` runs): the suite simulates `K` ranges, `R` is the
+//! `(K+1) x (K+1)` design covariance of `[range_1..K, depth]`, each range is gated as a
+//! 1-dof scalar, and the figures, CSV columns and report tables have one entry per
+//! beacon. With fewer than 3 beacons the horizontal position is only weakly observable
+//! (the filter leans on dead reckoning and the initial estimate); it still runs.
+//!
 //! The glue ([`FilterSetup`], [`run_scheme`]) is public so that the end-to-end
 //! consistency test (NEES) runs exactly the code of the experiment.
 
@@ -644,6 +651,30 @@ impl BeaconsScenario {
                 self.cases[..k].iter().map(|c| c.name.as_str()),
             )?;
             require_non_negative(file, &format!("{key}.corr_sigma_m"), case.corr_sigma_m)?;
+            // The outliers are drawn among the range samples of a run: K beacons x
+            // (duration / range period) samples (fewer with a short mission or few beacons).
+            let range_period = match case.timing {
+                TimingKind::Sync => t.sync_period_s,
+                TimingKind::Async => t.range_period_s,
+            };
+            let range_samples =
+                beacons.len() * (self.motion.duration_s / range_period).floor() as usize;
+            if n.outlier_count > range_samples {
+                return Err(SimError::invalid(
+                    file,
+                    "noise.outlier_count",
+                    format!(
+                        "{} outliers do not fit into the {range_samples} range samples of a run \
+                         of case `{}` ({} beacons x {} s / {} s); lower it or lengthen \
+                         motion.duration_s",
+                        n.outlier_count,
+                        case.name,
+                        beacons.len(),
+                        self.motion.duration_s,
+                        range_period
+                    ),
+                ));
+            }
             let timing = match case.timing {
                 TimingKind::Sync => Timing::Synchronous {
                     period: t.sync_period_s,
@@ -803,7 +834,9 @@ fn method(scheme: UpdateScheme, case: &str) -> String {
 
 fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
     let scenario: BeaconsScenario = ctx.load_scenario()?;
-    let checked = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    let mut checked = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    // `fathom run --seed`: the batch and the figure run below use this seed.
+    checked.base_seed = ctx.seed_or(checked.base_seed);
     let per_run: Vec<Vec<Vec<SchemeStats>>> =
         ctx.try_monte_carlo(checked.runs, checked.base_seed, |i, rng| {
             one_run(&checked, rng).map_err(|e| SimError::model(format!("run {i}"), e))
@@ -1253,8 +1286,15 @@ fn report_section(
 ) -> String {
     let schemes = UpdateScheme::ALL;
     let mut s = String::new();
+    let main_params = checked.cases[main].config.params();
     s.push_str(&format!(
-        "### Table 13 (case `{MAIN_CASE}`: asynchronous sensors, all noises, sigma_c = 0.2)\n\n"
+        "### Table 13 (case `{MAIN_CASE}`: {} sensors, all noises, sigma_c = {})\n\n",
+        if checked.cases[main].config.is_synchronous() {
+            "synchronous"
+        } else {
+            "asynchronous"
+        },
+        main_params.corr_sigma
     ));
     s.push_str(&format!(
         "3D position error (m), per-run statistic averaged over {} runs, 95 % CI in brackets.\n\n",
@@ -1383,13 +1423,30 @@ fn report_section(
         ],
         &rows,
     ));
+    // Range samples per run of the main case (all dispositions of the AS filter's
+    // range channels), for the sentence below: it depends on K and the duration.
+    let range_samples = per_run
+        .iter()
+        .map(|r| {
+            let c = &r[main][0].counts;
+            c[..c.len() - 1]
+                .iter()
+                .map(|c| c.accepted + c.rejected + c.superseded + c.stale)
+                .sum::<usize>() as f64
+        })
+        .sum::<f64>()
+        / per_run.len() as f64;
     s.push_str(&format!(
         "\n`expected false rej.` = clean range samples tested x P(chi2_1 > {}) = x {}: the rate at \
-         which a 2.5-sigma gate must reject clean samples of a consistent filter (about 1.2 %). \
-         The paper reports none, which a chi-square gate at this threshold cannot achieve on ~7000 \
-         range samples.\n",
+         which a {}-sigma gate must reject clean samples of a consistent filter (about {} %). \
+         The paper reports none, which a chi-square gate at this threshold cannot achieve on the \
+         ~{} range samples of a run ({} beacons).\n",
         f(d2, 2),
-        f(p_false, 5)
+        f(p_false, 5),
+        f(d2.sqrt(), 2),
+        f(100.0 * p_false, 1),
+        f(range_samples, 0),
+        checked.cases[main].setup.beacons.len()
     ));
 
     s.push_str(
@@ -1558,6 +1615,18 @@ fn report_section(
          before the first DVL/AHRS sample is the commanded velocity.\n\
          - Beacon positions, sample-time jitter and the initial covariance are not given by the paper.\n",
     );
+    let beacons = &checked.cases[main].setup.beacons;
+    s.push_str(&format!(
+        "- {} beacons (the paper uses 4; any number >= 1 works, R is (K+1)x(K+1) with K = {}, \
+         every range is gated as a 1-dof scalar) at (north, east, down) m: {}.\n",
+        beacons.len(),
+        beacons.len(),
+        beacons
+            .iter()
+            .map(|b| format!("({}, {}, {})", b.x, b.y, b.z))
+            .collect::<Vec<_>>()
+            .join(", ")
+    ));
     s.push_str("\n### The paper's own inconsistencies\n\n");
     s.push_str(
         "- Table 13's AS RMSE (0.1332) is below its mean (0.1522): impossible for any error series (see \
@@ -1622,6 +1691,52 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(err.contains("gate_sigmaa"), "{err}");
+    }
+
+    #[test]
+    fn any_number_of_beacons_checks_and_runs() {
+        let six = "positions = [[20.0, 0.0, 0.0], [10.0, 17.3, 40.0], [-10.0, 17.3, 0.0], \
+                   [-20.0, 0.0, 40.0], [-10.0, -17.3, 0.0], [10.0, -17.3, 40.0]]";
+        let preset = scenario_text();
+        let line = preset
+            .lines()
+            .find(|l| l.starts_with("positions = "))
+            .unwrap();
+        for (k, positions) in [(6, six), (1, "positions = [[20.0, 0.0, 0.0]]")] {
+            let text = preset
+                .replace(line, positions)
+                .replace("duration_s = 180.0", "duration_s = 20.0")
+                .replace("outlier_count = 276", "outlier_count = 30");
+            let s: BeaconsScenario = crate::scenario::parse_toml(&text, "b.toml").unwrap();
+            let mut c = s.check("b.toml", Some(2)).unwrap();
+            c.cases.truncate(1);
+            assert_eq!(c.cases[0].config.beacon_count(), k);
+            assert_eq!(c.cases[0].setup.channel_cov.nrows(), k + 1);
+            let d = simulate_run(&c, &mut run_rng(5, 0)).unwrap();
+            let (data, runs) = &d.cases[0];
+            assert_eq!(data.ranges.len(), k);
+            for r in runs {
+                assert_eq!(r.counts.len(), k + 1);
+                assert!(r.errors_3d.iter().all(|e| e.is_finite()));
+                assert_eq!(
+                    r.outliers_rejected + r.outliers_accepted + r.outliers_untested,
+                    30
+                );
+            }
+        }
+        // More outliers than range samples: a check error naming the key, not a
+        // failure in the middle of the run.
+        let text = preset
+            .replace(line, "positions = [[20.0, 0.0, 0.0]]")
+            .replace("duration_s = 180.0", "duration_s = 20.0");
+        let s: BeaconsScenario = crate::scenario::parse_toml(&text, "b.toml").unwrap();
+        let e = s.check("b.toml", None).unwrap_err().to_string();
+        assert!(
+            e.starts_with(
+                "b.toml: key `noise.outlier_count`: 276 outliers do not fit into the 200"
+            ),
+            "{e}"
+        );
     }
 
     #[test]

@@ -438,7 +438,9 @@ fn labels() -> Vec<String> {
 
 fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
     let scenario: NoiseScenario = ctx.load_scenario()?;
-    let checked = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    let mut checked = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    // `fathom run --seed`: the batch, the long run and the sample-time diagram use it.
+    checked.base_seed = ctx.seed_or(checked.base_seed);
     let period = scenario.timing.period_s;
 
     // Monte Carlo: per run, per case, a 5x5 covariance.

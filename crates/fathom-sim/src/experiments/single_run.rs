@@ -57,6 +57,8 @@ impl SingleRun {
             out_dir: workspace_root.join("target").join("bench").join(exp.name),
             runs: None,
             threads: None,
+            seed: None,
+            progress: None,
         };
         let run = match name {
             "fusion" => super::fusion::single_run(&ctx)?,

@@ -525,10 +525,12 @@ fn run_sweep(
     let mut means = Vec::with_capacity(values.len());
     for &v in values {
         let cfg = configure(&setup.run, v)?;
-        let results: Vec<RunResult> =
-            ctx.try_monte_carlo(setup.sensitivity_runs, setup.base_seed, |_, rng| {
-                run_once(setup, &cfg, mission, &SWEEP_METHODS, false, rng)
-            })?;
+        let results: Vec<RunResult> = ctx.try_monte_carlo_labeled(
+            &format!("fusion: sensitivity {key} = {v}"),
+            setup.sensitivity_runs,
+            setup.base_seed,
+            |_, rng| run_once(setup, &cfg, mission, &SWEEP_METHODS, false, rng),
+        )?;
         let row = SWEEP_METHODS
             .iter()
             .map(|&m| ci(&values_of_mean(&results, m)))
@@ -553,7 +555,9 @@ fn values_of_mean(results: &[RunResult], m: Method) -> Vec<f64> {
 
 fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
     let scenario: FusionScenario = ctx.load_scenario()?;
-    let setup = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    let mut setup = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    // `fathom run --seed`: every batch and the figure run below use this seed.
+    setup.base_seed = ctx.seed_or(setup.base_seed);
     let mission = setup.mission()?;
 
     let results: Vec<RunResult> = ctx.try_monte_carlo(setup.runs, setup.base_seed, |_, rng| {

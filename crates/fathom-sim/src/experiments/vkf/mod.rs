@@ -105,7 +105,9 @@ fn paired(a: &[f64], b: &[f64]) -> Result<(f64, [f64; 2]), SimError> {
 
 fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
     let scenario: VkfScenario = ctx.load_scenario()?;
-    let c = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    let mut c = scenario.check(&ctx.scenario_label, ctx.runs)?;
+    // `fathom run --seed`: both batches use this seed.
+    c.base_seed = ctx.seed_or(c.base_seed);
     let started = std::time::Instant::now();
     let shared = sim::build_shared(&c)?;
     let truth_time = started.elapsed().as_secs_f64();
@@ -115,9 +117,12 @@ fn run(ctx: &ExperimentContext) -> Result<ExperimentOutput, SimError> {
             .map_err(|e| SimError::model(format!("run {i}"), e))
     })?;
     let literal: Vec<RunOutput> = if c.literal_bias_runs > 0 {
-        ctx.try_monte_carlo(c.literal_bias_runs, c.base_seed, |_, rng| {
-            sim::one_run(&c, &shared, &c.dvl_literal, rng, false)
-        })?
+        ctx.try_monte_carlo_labeled(
+            "vkf: literal DVL bias",
+            c.literal_bias_runs,
+            c.base_seed,
+            |_, rng| sim::one_run(&c, &shared, &c.dvl_literal, rng, false),
+        )?
     } else {
         Vec::new()
     };

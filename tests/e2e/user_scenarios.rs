@@ -1,0 +1,216 @@
+//! The README's walkthrough through the real `fathom` binary: check the preset, copy
+//! `scenarios/beacons.toml`, replace the beacons by the README's six (and by 3 and 1),
+//! run `fathom run`, get results and plots; bad edits give one-line errors with
+//! exit 2. (The mission is shortened to 30 s and the runs to 6 to stay fast.)
+
+use std::path::Path;
+
+use crate::support::{fathom, preset, read, repo_root, scratch};
+
+/// The README's six-beacon `[beacons]` table, taken from README.md itself (the
+/// indented ```toml block starting with `[beacons]`), so the walkthrough cannot drift.
+fn readme_beacons_table() -> String {
+    let readme = std::fs::read_to_string(repo_root().join("README.md")).unwrap();
+    for cmd in [
+        "fathom check scenarios/beacons.toml",
+        "cp scenarios/beacons.toml my_beacons.toml",
+        "fathom run my_beacons.toml --runs 20 --out out/my_beacons",
+        "cargo build --release -p fathom-cli",
+    ] {
+        assert!(readme.contains(cmd), "README lost the step `{cmd}`");
+    }
+    let lines: Vec<&str> = readme.lines().collect();
+    let start = (0..lines.len() - 1)
+        .find(|&i| lines[i].trim() == "```toml" && lines[i + 1].trim() == "[beacons]")
+        .expect("README has a ```toml block with the [beacons] table");
+    let indent = lines[start].len() - lines[start].trim_start().len();
+    let mut table = String::new();
+    for line in &lines[start + 1..] {
+        if line.trim() == "```" {
+            return table;
+        }
+        table.push_str(line.get(indent..).unwrap_or(line.trim_start()));
+        table.push('\n');
+    }
+    panic!("unterminated ```toml block in README.md")
+}
+
+/// Three beacons, non-collinear, one deep.
+const THREE: &str = "positions = [[20.0, 0.0, 0.0], [-10.0, 17.3, 40.0], [-10.0, -17.3, 0.0]]";
+
+/// The preset with its `[beacons]` table (header and `positions` line) replaced by
+/// `table`, on a 30 s mission (fewer outliers to match): a user's edit, made fast.
+fn edited_table(table: &str) -> String {
+    let text = preset("beacons.toml");
+    let line = text
+        .lines()
+        .find(|l| l.starts_with("positions = "))
+        .expect("the preset has a positions line");
+    let old = format!("[beacons]\n{line}\n");
+    assert!(text.contains(&old), "the preset's [beacons] table moved");
+    text.replace(&old, table)
+        .replace("duration_s = 180.0", "duration_s = 30.0")
+        .replace("outlier_count = 276", "outlier_count = 40")
+}
+
+/// [`edited_table`] with a one-line `positions = ...`.
+fn edited(positions: &str) -> String {
+    edited_table(&format!("[beacons]\n{positions}\n"))
+}
+
+/// Runs `fathom check` and `fathom run` on `text` as `my_beacons.toml` and checks the
+/// outputs of a `k`-beacon run.
+fn walkthrough(tag: &str, text: &str, k: usize) {
+    let preset_check = fathom(&repo_root(), &["check", "scenarios/beacons.toml"]);
+    assert_eq!(preset_check.code, 0, "{preset_check:?}");
+    assert!(
+        preset_check.stdout.contains("[beacons]"),
+        "{preset_check:?}"
+    );
+    let dir = scratch(tag);
+    std::fs::write(dir.join("my_beacons.toml"), text).unwrap();
+    let check = fathom(&dir, &["check", "my_beacons.toml"]);
+    assert_eq!(check.code, 0, "{check:?}");
+    assert!(
+        check
+            .stdout
+            .starts_with("# OK my_beacons.toml: experiment `beacons`"),
+        "{check:?}"
+    );
+    let ran = fathom(
+        &dir,
+        &[
+            "run",
+            "my_beacons.toml",
+            "--runs",
+            "6",
+            "--out",
+            "out/my_beacons",
+        ],
+    );
+    assert_eq!(ran.code, 0, "{ran:?}");
+    // Not a terminal: no progress bar on stderr.
+    assert!(ran.stderr.is_empty(), "{ran:?}");
+    assert!(ran.stdout.starts_with("beacons ("), "{}", ran.stdout);
+    assert!(
+        ran.stdout.contains("outputs: out/my_beacons"),
+        "{}",
+        ran.stdout
+    );
+
+    let out = dir.join("out/my_beacons");
+    for file in [
+        "summary.json",
+        "report.md",
+        "run_info.json",
+        "scenario.toml",
+        "scenario.resolved.toml",
+        "error_vs_time.csv",
+        "per_run_stats.csv",
+        "single_run_estimates.csv",
+        "path_plan.svg",
+        "sample_times.svg",
+        "error_vs_time_high.svg",
+        "error_vs_time_single_run.svg",
+        "sc_estimate_vs_truth_plan.svg",
+    ] {
+        let meta = std::fs::metadata(out.join(file)).unwrap_or_else(|_| panic!("missing {file}"));
+        assert!(meta.len() > 100, "{file} is nearly empty");
+    }
+    sane_results(&out, k);
+}
+
+fn sane_results(out: &Path, k: usize) {
+    let summary: serde_json::Value = serde_json::from_str(&read(out, "summary.json")).unwrap();
+    assert_eq!(summary["runs"], 6);
+    let rows = summary["rows"].as_array().unwrap();
+    for scheme in ["AS", "SC", "SI"] {
+        let value = |metric: &str| {
+            rows.iter()
+                .find(|r| r["method"] == format!("{scheme}/high") && r["metric"] == metric)
+                .and_then(|r| r["value"].as_f64())
+                .unwrap_or_else(|| panic!("no {scheme}/high {metric}"))
+        };
+        // The 4-beacon preset localizes to ~0.15 m; dead reckoning alone drifts
+        // further. Any sane K-beacon fix stays well inside 0.5 m on a 30 s mission.
+        let mean = value("mean");
+        assert!(
+            mean.is_finite() && mean > 0.0 && mean < 0.5,
+            "{scheme}: {mean}"
+        );
+        assert!(value("max") >= mean && value("rmse") >= mean, "{scheme}");
+        let recall = value("outlier_recall");
+        assert!((0.8..=1.0).contains(&recall), "{scheme}: recall {recall}");
+    }
+    // One entry per beacon in the report's gate table and the sample-time figure; none
+    // beyond K.
+    let report = read(out, "report.md");
+    assert!(report.contains(&format!("- {k} beacons")), "{report}");
+    let timeline = read(out, "sample_times.svg");
+    for b in 1..=k {
+        assert!(report.contains(&format!("| AS | range{b} |")), "range{b}");
+        assert!(timeline.contains(&format!("range{b}")), "range{b}");
+    }
+    let next = format!("range{}", k + 1);
+    assert!(!report.contains(&format!("| AS | {next} |")));
+    assert!(!timeline.contains(&next));
+    // The plan view marks every beacon.
+    let plan = read(out, "path_plan.svg");
+    assert!(plan.contains("beacons"));
+}
+
+#[test]
+fn six_beacons_from_an_edited_preset_run_end_to_end() {
+    walkthrough(
+        "user-six-beacons",
+        &edited_table(&readme_beacons_table()),
+        6,
+    );
+}
+
+#[test]
+fn three_beacons_run_end_to_end() {
+    walkthrough("user-three-beacons", &edited(THREE), 3);
+}
+
+/// A single beacon is accepted (documented: fewer than 3 leave the horizontal
+/// position weakly observable, the run still works); no beacon, a malformed position
+/// and more outliers than range samples are one-line usage errors (exit 2).
+#[test]
+fn few_beacons_and_bad_beacon_edits() {
+    let dir = scratch("user-bad-beacons");
+    let one = edited("positions = [[20.0, 0.0, 0.0]]");
+    std::fs::write(dir.join("one.toml"), &one).unwrap();
+    let ran = fathom(&dir, &["run", "one.toml", "--runs", "2", "--out", "one"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+
+    for (file, text, expected) in [
+        (
+            "none.toml",
+            edited("positions = []"),
+            "none.toml: key `beacons.positions`: needs at least one beacon",
+        ),
+        (
+            "two_coords.toml",
+            edited("positions = [[20.0, 0.0], [1.0, 2.0, 3.0]]"),
+            "two_coords.toml: key `beacons.positions",
+        ),
+        (
+            "too_many_outliers.toml",
+            one.replace("outlier_count = 40", "outlier_count = 400"),
+            "too_many_outliers.toml: key `noise.outlier_count`: 400 outliers do not fit into \
+             the 300 range samples",
+        ),
+    ] {
+        std::fs::write(dir.join(file), &text).unwrap();
+        for args in [vec!["check", file], vec!["run", file, "--out", "o"]] {
+            let ran = fathom(&dir, &args);
+            assert_eq!(ran.code, 2, "{args:?}: {ran:?}");
+            let line = ran.stderr.trim_end();
+            assert_eq!(line.lines().count(), 1, "{ran:?}");
+            assert!(line.starts_with("error: "), "{ran:?}");
+            assert!(line.contains(expected), "{args:?}: {line}");
+            assert!(!line.contains("panicked"), "{line}");
+        }
+    }
+}
