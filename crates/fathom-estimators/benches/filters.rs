@@ -373,6 +373,22 @@ fn min_batch_times() {
             pb.step(&mut kf, &mut t);
         }
     });
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    report("  of which predict", || {
+        for _ in 0..500 {
+            t += DT;
+            kf.predict(black_box(&pb.f), black_box(&pb.q), t).unwrap();
+        }
+    });
+    let mut kf = pb.filter();
+    report("  of which update", || {
+        for _ in 0..500 {
+            black_box(
+                kf.update(black_box(&pb.z), black_box(&pb.h), black_box(&pb.r))
+                    .unwrap(),
+            );
+        }
+    });
     let (mut x, mut p) = (SVector::<f64, 6>::zeros(), SMatrix::<f64, 6, 6>::identity());
     report("nalgebra_reference_6x3_predict_update", || {
         for _ in 0..500 {
