@@ -17,6 +17,9 @@
 use fathom_core::gaussian::SYMMETRY_TOLERANCE;
 use nalgebra::{ArrayStorage, SMatrix, SVector};
 
+/// (Loops bounded by `$j` are written `0..j + 1`, not `0..=j`: the inclusive range
+/// keeps an exhaustion flag that stopped the compiler from unrolling them for `N = 9`.)
+///
 /// `for $j in 0..$n $body` with the iterations written out one by one (`$j` a
 /// literal in each copy) when `$n <= 16`, a plain loop above. Inside, loops bounded
 /// by `$j` then have constant trip counts, so the compiler unrolls them and keeps
@@ -161,16 +164,16 @@ pub(crate) fn propagate_covariance<const N: usize>(
     unrolled_for!(j in 0..N, {
         // rows 0..=j of column j of A F^T: sum_k A[:, k] F[j, k] (F[j, k] = fc[k][j])
         let mut col = [0.0; N];
-        for i in 0..=j {
+        for i in 0..j + 1 {
             col[i] = a[0][i] * fc[0][j];
         }
         for k in 1..N {
             let fjk = fc[k][j];
-            for i in 0..=j {
+            for i in 0..j + 1 {
                 col[i] += a[k][i] * fjk;
             }
         }
-        for i in 0..=j {
+        for i in 0..j + 1 {
             let (upper, lower) = (qc[j][i], qc[i][j]);
             q_ok &= (upper - lower).abs() <= threshold;
             let v = col[i] + 0.5 * (upper + lower);
@@ -205,7 +208,7 @@ pub(crate) fn innovation<const N: usize, const M: usize>(
     }
     let mut s = mul(hc, &u);
     for j in 0..M {
-        for i in 0..=j {
+        for i in 0..j + 1 {
             let v = s[j][i] + 0.5 * (rc[j][i] + rc[i][j]);
             s[j][i] = v;
             s[i][j] = v;
@@ -329,14 +332,14 @@ pub(crate) fn joseph_update<const N: usize, const M: usize>(
     let mut out = [[0.0; N]; N];
     unrolled_for!(j in 0..N, {
         let mut col = [0.0; N];
-        col[..=j].copy_from_slice(&pc[j][..=j]);
+        col[..j + 1].copy_from_slice(&pc[j][..j + 1]);
         for m in 0..M {
             let (ujm, kjm) = (uc[m][j], kc[m][j]);
-            for i in 0..=j {
+            for i in 0..j + 1 {
                 col[i] -= kc[m][i] * ujm + w[m][i] * kjm;
             }
         }
-        for i in 0..=j {
+        for i in 0..j + 1 {
             out[j][i] = col[i];
             out[i][j] = col[i];
         }
@@ -359,7 +362,7 @@ pub(crate) fn joseph_update_scalar<const N: usize>(
     let mut out = [[0.0; N]; N];
     unrolled_for!(j in 0..N, {
         let (uj, kj) = (uc[j], kc[j]);
-        for i in 0..=j {
+        for i in 0..j + 1 {
             let v = pc[j][i] - (kc[i] * uj + w[i] * kj);
             out[j][i] = v;
             out[i][j] = v;
