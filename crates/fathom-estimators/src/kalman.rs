@@ -83,16 +83,26 @@ impl SequentialReport {
 /// `x`, `P` and `time` unchanged.
 ///
 /// Equations (Bar-Shalom et al., Joseph form):
-/// - predict: `x = F x (+ B u)`, `P = F P F^T + Q`, symmetrized;
-/// - update: `S = H P H^T + R`, `K = P H^T S^-1` (Cholesky solve),
-///   `x = x + K nu`, `P = (I - K H) P (I - K H)^T + K R K^T`, symmetrized.
+/// - predict: `x = F x (+ B u)`, `P = F P F^T + (Q + Q^T) / 2` (exactly symmetric);
+/// - update: `S = H P H^T + R`, `S = L D L^T`, `K = P H^T S^-1` (triangular solves),
+///   `nis = nu^T S^-1 nu`, `x = x + K nu`, `P = (I - K H) P (I - K H)^T + K R K^T`
+///   (expanded Joseph form, exactly symmetric; see `linalg::joseph_update`).
 ///
-/// Cost: both covariance steps form one triangle and mirror it (exactly symmetric);
-/// the Joseph product is grouped as `A P - ((A P) H^T - K R) K^T` with
-/// `A P = P - K (P H^T)^T`, `O(N^2 M)` instead of `O(N^3)` (same matrix in exact
-/// arithmetic for any `K`). The positive-definiteness checks are a lean Cholesky
-/// (`N^3 / 6`). A constant `R` can be checked once with [`MeasurementNoise`]
-/// ([`KalmanFilter::update_with_noise`]). See `docs/performance.md`.
+/// Checks: a step computes first and then makes ONE validity test of all it needs
+/// (`Q`'s diagonal and symmetry, `R` valid, `S` positive definite, the NIS and the
+/// new `x` finite, the new `P` positive definite). A non-finite input entry always
+/// reaches one of the tested quantities (see the kernel docs in `linalg`), so the
+/// fast test fails for it; then the inputs are checked one by one in the documented
+/// order, which returns the same error (variant, `what`, index, time) as checking
+/// up front would, and the filter is not modified. String formatting happens only
+/// on that path.
+///
+/// Cost: both covariance steps form one triangle and mirror it; the Joseph update is
+/// `O(N^2 M)` instead of `O(N^3)`; the positive-definiteness tests are a `2 x 2`-block
+/// `L D L^T` (`N^3 / 6`, one division per two columns); the triangular kernels are
+/// unrolled for `N <= 16`. A constant `R` can be checked once with
+/// [`MeasurementNoise`] ([`KalmanFilter::update_with_noise`]). See
+/// `docs/performance.md`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KalmanFilter<const N: usize> {
     x: SVector<f64, N>,
@@ -581,7 +591,17 @@ impl<const N: usize> KalmanFilter<N> {
     }
 }
 
+#[inline]
 fn check_time(what: &str, new_time: Time, current: Time) -> Result<(), EstimatorError> {
+    if new_time.is_finite() && new_time >= current {
+        return Ok(());
+    }
+    time_error(what, new_time, current)
+}
+
+#[cold]
+#[inline(never)]
+fn time_error(what: &str, new_time: Time, current: Time) -> Result<(), EstimatorError> {
     if !new_time.is_finite() {
         return Err(EstimatorError::NonFinite {
             what: format!("{what}: time"),

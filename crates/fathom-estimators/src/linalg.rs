@@ -1,18 +1,18 @@
 //! Fixed-size kernels of the Kalman core (no allocation): the symmetric covariance
 //! prediction `F P F^T + Q`, the innovation covariance `S = H P H^T + R` with its
 //! `L D L^T` factor (gain by triangular solves, NIS), the Joseph-form update computed
-//! for one triangle, positive-definiteness tests, and validity predicates for `Q` and
-//! `R` (the exact error is searched for only when a predicate fails, see
+//! for one triangle, the positive-definiteness test, and validity predicates for `Q`
+//! and `R` (the exact error is searched for only when a predicate fails, see
 //! [`crate::kalman`]).
 //!
 //! Costs (multiply-adds, `N` states, `M` measurements): prediction `N^3 + N^2 (N + 1)
 //! / 2` (`F P`, then the upper triangle of `(F P) F^T`); innovation `N^2 M + N M^2`;
 //! gain `N M^2` (two triangular solves with the factor of `S`, no explicit inverse);
-//! Joseph update `N M^2 + N (N + 1) M`; positive-definiteness test `N^3 / 6` and `N`
-//! divisions. Matrices are read through their column arrays (`[[f64; rows]; cols]`,
-//! nalgebra's storage), and every inner loop is an axpy over a whole column of a
-//! compile-time length, which the compiler unrolls and vectorizes; see
-//! `docs/performance.md`.
+//! Joseph update `N M^2 + N (N + 1) M`; positive-definiteness test `N^3 / 6` and `N /
+//! 2` divisions. Matrices are read through their column arrays (`[[f64;
+//! rows]; cols]`, nalgebra's storage); loops over whole columns have compile-time
+//! lengths and the triangular ones are written out per column (`unrolled_for!`),
+//! so the compiler unrolls and vectorizes them. See `docs/performance.md`.
 
 use fathom_core::gaussian::SYMMETRY_TOLERANCE;
 use nalgebra::{ArrayStorage, SMatrix, SVector};
