@@ -2,10 +2,16 @@
 //! one EKF range update, one AS / SC / SI epoch of the beacons filter, one 15-state
 //! error-state prediction. Run with `cargo xtask bench` (or `cargo bench -p
 //! fathom-estimators`); see `docs/performance.md`.
+//!
+//! Instruction counts (repeatable on a loaded machine): with `FATHOM_CALLGRIND=<n>`
+//! the binary skips criterion and runs `n` steps of each Kalman benchmark in its own
+//! `#[inline(never)]` function, e.g.
+//! `FATHOM_CALLGRIND=10000 valgrind --tool=callgrind --toggle-collect='*callgrind_*'
+//! target/release/deps/filters-<hash>`, then instructions per step = `Ir / n`.
 
 use std::hint::black_box;
 
-use criterion::{BatchSize, Criterion, criterion_group, criterion_main};
+use criterion::{BatchSize, Criterion, criterion_group};
 use fathom_core::Gaussian;
 use fathom_estimators::{
     GateThreshold, KalmanFilter, MeasurementNoise,
@@ -19,68 +25,85 @@ use nalgebra::{DMatrix, Matrix3, Matrix4, SMatrix, SVector, Vector3, Vector4};
 
 const DT: f64 = 0.1;
 
-/// 3-D constant velocity: x = [p, v], z = p + noise (6 states, 3 measurements).
-fn kf_6_3(c: &mut Criterion) {
-    let f = models::cv_transition_3d(DT).unwrap();
-    let q = models::cv_white_accel_q_3d(DT, [0.1, 0.1, 0.05]).unwrap();
-    let h = models::cv_position_h_3d();
-    let r = Matrix3::new(0.25, 0.02, 0.0, 0.02, 0.25, 0.01, 0.0, 0.01, 0.5);
-    let z = Vector3::new(1.0, -2.0, 0.5);
-    let prior =
-        Gaussian::new(SVector::<f64, 6>::zeros(), SMatrix::<f64, 6, 6>::identity()).unwrap();
-    let mut kf = KalmanFilter::new(prior.clone(), 0.0).unwrap();
-    let mut t = 0.0;
-    c.bench_function("kf_6x3_predict_update", |b| {
-        b.iter(|| {
-            t += DT;
-            kf.predict(black_box(&f), black_box(&q), t).unwrap();
-            black_box(
-                kf.update(black_box(&z), black_box(&h), black_box(&r))
-                    .unwrap(),
-            );
-        })
-    });
-    // Reference: the textbook step in plain nalgebra, no checks, standard Joseph
-    // product form (what "a fixed-size nalgebra filter" costs).
-    let (mut x, mut p) = (SVector::<f64, 6>::zeros(), SMatrix::<f64, 6, 6>::identity());
-    c.bench_function("nalgebra_reference_6x3_predict_update", |b| {
-        b.iter(|| {
-            let (f, q, h, r, z) = (
-                black_box(&f),
-                black_box(&q),
-                black_box(&h),
-                black_box(&r),
-                black_box(&z),
-            );
-            x = f * x;
-            p = f * p * f.transpose() + q;
-            let pht = p * h.transpose();
-            let s = h * pht + r;
-            let k = pht * s.try_inverse().unwrap();
-            x += k * (z - h * x);
-            let a = SMatrix::<f64, 6, 6>::identity() - k * h;
-            p = a * p * a.transpose() + k * r * k.transpose();
-            black_box(&p);
-        })
-    });
-    // The same step with the measurement noise checked once (MeasurementNoise).
-    let noise = MeasurementNoise::new(r).unwrap();
-    let mut kf = KalmanFilter::new(prior, 0.0).unwrap();
-    let mut t = 0.0;
-    c.bench_function("kf_6x3_predict_update_checked_r", |b| {
-        b.iter(|| {
-            t += DT;
-            kf.predict(black_box(&f), black_box(&q), t).unwrap();
-            black_box(
-                kf.update_with_noise(black_box(&z), black_box(&h), black_box(&noise))
-                    .unwrap(),
-            );
-        })
-    });
+/// One benchmark problem: `x` is `N`-dimensional, `M` measurements.
+struct Problem<const N: usize, const M: usize> {
+    f: SMatrix<f64, N, N>,
+    q: SMatrix<f64, N, N>,
+    h: SMatrix<f64, M, N>,
+    r: SMatrix<f64, M, M>,
+    z: SVector<f64, M>,
 }
 
-/// 3-D constant acceleration: x = [p, v, a], z = p + noise (9 states, 3 measurements).
-fn kf_9_3(c: &mut Criterion) {
+impl<const N: usize, const M: usize> Problem<N, M> {
+    fn filter(&self) -> KalmanFilter<N> {
+        let prior =
+            Gaussian::new(SVector::<f64, N>::zeros(), SMatrix::<f64, N, N>::identity()).unwrap();
+        KalmanFilter::new(prior, 0.0).unwrap()
+    }
+
+    /// One `predict(F, Q)` + `update(z, H, R)`, every input unchecked before the call
+    /// (black-boxed, so nothing is hoisted out of the loop).
+    #[inline(always)]
+    fn step(&self, kf: &mut KalmanFilter<N>, t: &mut f64) {
+        *t += DT;
+        kf.predict(black_box(&self.f), black_box(&self.q), *t)
+            .unwrap();
+        black_box(
+            kf.update(black_box(&self.z), black_box(&self.h), black_box(&self.r))
+                .unwrap(),
+        );
+    }
+
+    /// [`Problem::step`] with `R` checked once ([`MeasurementNoise`]).
+    #[inline(always)]
+    fn step_checked_r(&self, kf: &mut KalmanFilter<N>, t: &mut f64, noise: &MeasurementNoise<M>) {
+        *t += DT;
+        kf.predict(black_box(&self.f), black_box(&self.q), *t)
+            .unwrap();
+        black_box(
+            kf.update_with_noise(black_box(&self.z), black_box(&self.h), black_box(noise))
+                .unwrap(),
+        );
+    }
+
+    /// The textbook step in plain nalgebra, no checks, standard Joseph product form
+    /// (what "a fixed-size nalgebra filter" costs).
+    #[inline(always)]
+    fn reference_step(&self, x: &mut SVector<f64, N>, p: &mut SMatrix<f64, N, N>) {
+        let (f, q, h, r, z) = (
+            black_box(&self.f),
+            black_box(&self.q),
+            black_box(&self.h),
+            black_box(&self.r),
+            black_box(&self.z),
+        );
+        *x = f * *x;
+        *p = f * *p * f.transpose() + q;
+        let pht = *p * h.transpose();
+        let s = h * pht + r;
+        let k = pht * s.try_inverse().unwrap();
+        *x += k * (z - h * *x);
+        let a = SMatrix::<f64, N, N>::identity() - k * h;
+        *p = a * *p * a.transpose() + k * r * k.transpose();
+        black_box(&*p);
+    }
+}
+
+/// 3-D constant velocity: x = [p, v], z = p + noise (6 states, 3 measurements), a
+/// dense correlated `R`.
+fn cv_6_3() -> Problem<6, 3> {
+    Problem {
+        f: models::cv_transition_3d(DT).unwrap(),
+        q: models::cv_white_accel_q_3d(DT, [0.1, 0.1, 0.05]).unwrap(),
+        h: models::cv_position_h_3d(),
+        r: Matrix3::new(0.25, 0.02, 0.0, 0.02, 0.25, 0.01, 0.0, 0.01, 0.5),
+        z: Vector3::new(1.0, -2.0, 0.5),
+    }
+}
+
+/// 3-D constant acceleration: x = [p, v, a], z = p + noise (9 states, 3
+/// measurements), diagonal `R`.
+fn ca_9_3() -> Problem<9, 3> {
     let mut f = SMatrix::<f64, 9, 9>::identity();
     let mut q = SMatrix::<f64, 9, 9>::zeros();
     let s = 0.05; // jerk PSD
@@ -103,22 +126,71 @@ fn kf_9_3(c: &mut Criterion) {
     let mut h = SMatrix::<f64, 3, 9>::zeros();
     h.fixed_view_mut::<3, 3>(0, 0)
         .copy_from(&Matrix3::identity());
-    let r = Matrix3::from_diagonal(&Vector3::new(0.25, 0.25, 0.5));
-    let z = Vector3::new(1.0, -2.0, 0.5);
-    let prior =
-        Gaussian::new(SVector::<f64, 9>::zeros(), SMatrix::<f64, 9, 9>::identity()).unwrap();
-    let mut kf = KalmanFilter::new(prior, 0.0).unwrap();
-    let mut t = 0.0;
-    c.bench_function("kf_9x3_predict_update", |b| {
-        b.iter(|| {
-            t += DT;
-            kf.predict(black_box(&f), black_box(&q), t).unwrap();
-            black_box(
-                kf.update(black_box(&z), black_box(&h), black_box(&r))
-                    .unwrap(),
-            );
-        })
+    Problem {
+        f,
+        q,
+        h,
+        r: Matrix3::from_diagonal(&Vector3::new(0.25, 0.25, 0.5)),
+        z: Vector3::new(1.0, -2.0, 0.5),
+    }
+}
+
+fn kf_6_3(c: &mut Criterion) {
+    let pb = cv_6_3();
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    c.bench_function("kf_6x3_predict_update", |b| {
+        b.iter(|| pb.step(&mut kf, &mut t))
     });
+    let (mut x, mut p) = (SVector::<f64, 6>::zeros(), SMatrix::<f64, 6, 6>::identity());
+    c.bench_function("nalgebra_reference_6x3_predict_update", |b| {
+        b.iter(|| pb.reference_step(&mut x, &mut p))
+    });
+    let noise = MeasurementNoise::new(pb.r).unwrap();
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    c.bench_function("kf_6x3_predict_update_checked_r", |b| {
+        b.iter(|| pb.step_checked_r(&mut kf, &mut t, &noise))
+    });
+}
+
+fn kf_9_3(c: &mut Criterion) {
+    let pb = ca_9_3();
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    c.bench_function("kf_9x3_predict_update", |b| {
+        b.iter(|| pb.step(&mut kf, &mut t))
+    });
+}
+
+#[inline(never)]
+fn callgrind_kf_6x3(pb: &Problem<6, 3>, n: usize) {
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    for _ in 0..n {
+        pb.step(&mut kf, &mut t);
+    }
+}
+
+#[inline(never)]
+fn callgrind_kf_6x3_checked_r(pb: &Problem<6, 3>, n: usize) {
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    let noise = MeasurementNoise::new(pb.r).unwrap();
+    for _ in 0..n {
+        pb.step_checked_r(&mut kf, &mut t, &noise);
+    }
+}
+
+#[inline(never)]
+fn callgrind_reference_6x3(pb: &Problem<6, 3>, n: usize) {
+    let (mut x, mut p) = (SVector::<f64, 6>::zeros(), SMatrix::<f64, 6, 6>::identity());
+    for _ in 0..n {
+        pb.reference_step(&mut x, &mut p);
+    }
+}
+
+#[inline(never)]
+fn callgrind_kf_9x3(pb: &Problem<9, 3>, n: usize) {
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    for _ in 0..n {
+        pb.step(&mut kf, &mut t);
+    }
 }
 
 const BEACONS: [[f64; 3]; 4] = [
@@ -272,4 +344,89 @@ criterion_group!(
     beacon_epochs,
     eskf_predict
 );
-criterion_main!(benches);
+
+/// Fastest and median time per step over many short batches (500 steps, ~0.1-1 ms):
+/// on a loaded machine most batches run without being preempted, so the fastest
+/// batch is close to the unloaded cost (`FATHOM_MIN_BATCH=1`; development aid, the
+/// reported numbers are criterion's).
+fn min_batch_times() {
+    fn report(name: &str, mut batch: impl FnMut()) {
+        let mut times: Vec<f64> = (0..3000)
+            .map(|_| {
+                let start = std::time::Instant::now();
+                batch();
+                start.elapsed().as_secs_f64() * 1e9 / 500.0
+            })
+            .collect();
+        times.sort_by(f64::total_cmp);
+        println!(
+            "{name:<40} fastest {:8.1} ns  p10 {:8.1} ns  median {:8.1} ns",
+            times[0],
+            times[times.len() / 10],
+            times[times.len() / 2]
+        );
+    }
+    let pb = cv_6_3();
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    report("kf_6x3_predict_update", || {
+        for _ in 0..500 {
+            pb.step(&mut kf, &mut t);
+        }
+    });
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    report("  of which predict", || {
+        for _ in 0..500 {
+            t += DT;
+            kf.predict(black_box(&pb.f), black_box(&pb.q), t).unwrap();
+        }
+    });
+    let mut kf = pb.filter();
+    report("  of which update", || {
+        for _ in 0..500 {
+            black_box(
+                kf.update(black_box(&pb.z), black_box(&pb.h), black_box(&pb.r))
+                    .unwrap(),
+            );
+        }
+    });
+    let (mut x, mut p) = (SVector::<f64, 6>::zeros(), SMatrix::<f64, 6, 6>::identity());
+    report("nalgebra_reference_6x3_predict_update", || {
+        for _ in 0..500 {
+            pb.reference_step(&mut x, &mut p);
+        }
+    });
+    let noise = MeasurementNoise::new(pb.r).unwrap();
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    report("kf_6x3_predict_update_checked_r", || {
+        for _ in 0..500 {
+            pb.step_checked_r(&mut kf, &mut t, &noise);
+        }
+    });
+    let pb = ca_9_3();
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    report("kf_9x3_predict_update", || {
+        for _ in 0..500 {
+            pb.step(&mut kf, &mut t);
+        }
+    });
+}
+
+fn main() {
+    if let Some(n) = std::env::var("FATHOM_CALLGRIND")
+        .ok()
+        .and_then(|v| v.parse::<usize>().ok())
+    {
+        // Fixed work for instruction counting (see the module docs); no criterion.
+        callgrind_kf_6x3(&cv_6_3(), n);
+        callgrind_kf_6x3_checked_r(&cv_6_3(), n);
+        callgrind_reference_6x3(&cv_6_3(), n);
+        callgrind_kf_9x3(&ca_9_3(), n);
+        return;
+    }
+    if std::env::var_os("FATHOM_MIN_BATCH").is_some() {
+        min_batch_times();
+        return;
+    }
+    benches();
+    Criterion::default().configure_from_args().final_summary();
+}

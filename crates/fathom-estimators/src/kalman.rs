@@ -83,16 +83,26 @@ impl SequentialReport {
 /// `x`, `P` and `time` unchanged.
 ///
 /// Equations (Bar-Shalom et al., Joseph form):
-/// - predict: `x = F x (+ B u)`, `P = F P F^T + Q`, symmetrized;
-/// - update: `S = H P H^T + R`, `K = P H^T S^-1` (Cholesky solve),
-///   `x = x + K nu`, `P = (I - K H) P (I - K H)^T + K R K^T`, symmetrized.
+/// - predict: `x = F x (+ B u)`, `P = F P F^T + (Q + Q^T) / 2` (exactly symmetric);
+/// - update: `S = H P H^T + R`, `S = L D L^T`, `K = P H^T S^-1` (triangular solves),
+///   `nis = nu^T S^-1 nu`, `x = x + K nu`, `P = (I - K H) P (I - K H)^T + K R K^T`
+///   (expanded Joseph form, exactly symmetric; see `linalg::joseph_update`).
 ///
-/// Cost: both covariance steps form one triangle and mirror it (exactly symmetric);
-/// the Joseph product is grouped as `A P - ((A P) H^T - K R) K^T` with
-/// `A P = P - K (P H^T)^T`, `O(N^2 M)` instead of `O(N^3)` (same matrix in exact
-/// arithmetic for any `K`). The positive-definiteness checks are a lean Cholesky
-/// (`N^3 / 6`). A constant `R` can be checked once with [`MeasurementNoise`]
-/// ([`KalmanFilter::update_with_noise`]). See `docs/performance.md`.
+/// Checks: a step computes first and then makes ONE validity test of all it needs
+/// (`Q`'s diagonal and symmetry, `R` valid, `S` positive definite, the NIS and the
+/// new `x` finite, the new `P` positive definite). A non-finite input entry always
+/// reaches one of the tested quantities (see the kernel docs in `linalg`), so the
+/// fast test fails for it; then the inputs are checked one by one in the documented
+/// order, which returns the same error (variant, `what`, index, time) as checking
+/// up front would, and the filter is not modified. String formatting happens only
+/// on that path.
+///
+/// Cost: both covariance steps form one triangle and mirror it; the Joseph update is
+/// `O(N^2 M)` instead of `O(N^3)`; the positive-definiteness tests are a `2 x 2`-block
+/// `L D L^T` (`N^3 / 6`, one division per two columns); the triangular kernels are
+/// unrolled for `N <= 16`. A constant `R` can be checked once with
+/// [`MeasurementNoise`] ([`KalmanFilter::update_with_noise`]). See
+/// `docs/performance.md`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct KalmanFilter<const N: usize> {
     x: SVector<f64, N>,
@@ -104,7 +114,7 @@ pub struct KalmanFilter<const N: usize> {
 struct Prepared<const N: usize, const M: usize> {
     pht: SMatrix<f64, N, M>,
     s: SMatrix<f64, M, M>,
-    s_inv: SMatrix<f64, M, M>,
+    ldl: linalg::Ldl<M>,
     nis: f64,
 }
 
@@ -190,9 +200,10 @@ impl<const N: usize> KalmanFilter<N> {
         new_time: Time,
     ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
-        check_finite("transition matrix F", f.as_slice(), N, N, new_time)?;
-        let x_pred = f * self.x;
-        self.predict_core(x_pred, f, q, new_time)
+        let x_pred = linalg::mat_vec(f, &self.x);
+        self.predict_core(x_pred, f, q, new_time, || {
+            check_finite("transition matrix F", f.as_slice(), N, N, new_time)
+        })
     }
 
     /// Predicts with a control input: `x = F x + B u`, `P = F P F^T + Q`.
@@ -209,11 +220,12 @@ impl<const N: usize> KalmanFilter<N> {
         new_time: Time,
     ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
-        check_finite("transition matrix F", f.as_slice(), N, N, new_time)?;
-        check_finite("control matrix B", b.as_slice(), N, U, new_time)?;
-        check_finite("control input u", u.as_slice(), U, 1, new_time)?;
         let x_pred = f * self.x + b * u;
-        self.predict_core(x_pred, f, q, new_time)
+        self.predict_core(x_pred, f, q, new_time, || {
+            check_finite("transition matrix F", f.as_slice(), N, N, new_time)?;
+            check_finite("control matrix B", b.as_slice(), N, U, new_time)?;
+            check_finite("control input u", u.as_slice(), U, 1, new_time)
+        })
     }
 
     /// EKF prediction: the caller propagates the state through its nonlinear model,
@@ -229,16 +241,23 @@ impl<const N: usize> KalmanFilter<N> {
         new_time: Time,
     ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
-        check_finite(
-            "transition Jacobian F",
-            f_jacobian.as_slice(),
-            N,
-            N,
-            new_time,
-        )?;
-        self.predict_core(*x_pred, f_jacobian, q, new_time)
+        self.predict_core(*x_pred, f_jacobian, q, new_time, || {
+            check_finite(
+                "transition Jacobian F",
+                f_jacobian.as_slice(),
+                N,
+                N,
+                new_time,
+            )
+        })
     }
 
+    /// The shared prediction: computes `P = F P F^T + Q`, then ONE validity test of
+    /// everything (`Q`'s diagonal and symmetry, `x_pred` finite, `P` positive
+    /// definite, which also rejects a non-finite `F` or `Q`, see
+    /// [`linalg::propagate_covariance`]); only when it fails are the checks run one by
+    /// one in the documented order (`input_checks` first: `F`, `B`, `u`), to return
+    /// the same error as checking each input up front.
     #[inline]
     fn predict_core(
         &mut self,
@@ -246,11 +265,19 @@ impl<const N: usize> KalmanFilter<N> {
         f: &SMatrix<f64, N, N>,
         q: &SMatrix<f64, N, N>,
         new_time: Time,
+        input_checks: impl FnOnce() -> Result<(), EstimatorError>,
     ) -> Result<(), EstimatorError> {
-        check_finite("predicted state x", x_pred.as_slice(), N, 1, new_time)?;
-        check_process_noise(q, new_time)?;
-        let p_pred = linalg::propagate_covariance(f, &self.p, q);
-        check_pd("predicted covariance P", &p_pred, new_time)?;
+        let (p_pred, q_ok) = linalg::propagate_covariance(f, &self.p, q);
+        if !(q_ok && linalg::all_finite(x_pred.as_slice()) && linalg::is_positive_definite(&p_pred))
+        {
+            return Err(prediction_error(
+                input_checks,
+                &x_pred,
+                q,
+                &p_pred,
+                new_time,
+            ));
+        }
         self.x = x_pred;
         self.p = p_pred;
         self.time = new_time;
@@ -271,10 +298,8 @@ impl<const N: usize> KalmanFilter<N> {
         h: &SMatrix<f64, M, N>,
         r: &SMatrix<f64, M, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        check_finite("measurement z", z.as_slice(), M, 1, self.time)?;
-        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
         let nu = z - h * self.x;
-        let prep = self.prepare(&nu, h, r, true)?;
+        let prep = self.prepare(&nu, h, r, true, || measurement_checks(z, h, self.time))?;
         self.apply(&nu, prep)
     }
 
@@ -289,9 +314,7 @@ impl<const N: usize> KalmanFilter<N> {
         h: &SMatrix<f64, M, N>,
         r: &SMatrix<f64, M, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        check_finite("innovation nu", nu.as_slice(), M, 1, self.time)?;
-        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
-        let prep = self.prepare(nu, h, r, true)?;
+        let prep = self.prepare(nu, h, r, true, || innovation_checks(nu, h, self.time))?;
         self.apply(nu, prep)
     }
 
@@ -306,11 +329,10 @@ impl<const N: usize> KalmanFilter<N> {
         h: &SMatrix<f64, M, N>,
         noise: &MeasurementNoise<M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        check_finite("measurement z", z.as_slice(), M, 1, self.time)?;
-        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
         let nu = z - h * self.x;
-        let r = noise.matrix();
-        let prep = self.prepare(&nu, h, r, false)?;
+        let prep = self.prepare(&nu, h, noise.matrix(), false, || {
+            measurement_checks(z, h, self.time)
+        })?;
         self.apply(&nu, prep)
     }
 
@@ -327,10 +349,9 @@ impl<const N: usize> KalmanFilter<N> {
         noise: &MeasurementNoise<M>,
         gate: Option<GateThreshold>,
     ) -> Result<Gate<M>, EstimatorError> {
-        check_finite("innovation nu", nu.as_slice(), M, 1, self.time)?;
-        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
-        let r = noise.matrix();
-        let prep = self.prepare(nu, h, r, false)?;
+        let prep = self.prepare(nu, h, noise.matrix(), false, || {
+            innovation_checks(nu, h, self.time)
+        })?;
         if let Some(g) = gate
             && !g.accepts(prep.nis)
         {
@@ -351,10 +372,9 @@ impl<const N: usize> KalmanFilter<N> {
         r: &SMatrix<f64, M, M>,
         gate: GateThreshold,
     ) -> Result<Gate<M>, EstimatorError> {
-        check_finite("measurement z", z.as_slice(), M, 1, self.time)?;
-        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
         let nu = z - h * self.x;
-        self.gated_core(&nu, h, r, gate)
+        let prep = self.prepare(&nu, h, r, true, || measurement_checks(z, h, self.time))?;
+        self.gated_apply(&nu, prep, gate)
     }
 
     /// Gated update with a given innovation (EKF flavour of [`KalmanFilter::update_gated`]).
@@ -368,28 +388,30 @@ impl<const N: usize> KalmanFilter<N> {
         r: &SMatrix<f64, M, M>,
         gate: GateThreshold,
     ) -> Result<Gate<M>, EstimatorError> {
-        check_finite("innovation nu", nu.as_slice(), M, 1, self.time)?;
-        check_finite("measurement matrix H", h.as_slice(), M, N, self.time)?;
-        self.gated_core(nu, h, r, gate)
+        let prep = self.prepare(nu, h, r, true, || innovation_checks(nu, h, self.time))?;
+        self.gated_apply(nu, prep, gate)
     }
 
-    fn gated_core<const M: usize>(
+    fn gated_apply<const M: usize>(
         &mut self,
         nu: &SVector<f64, M>,
-        h: &SMatrix<f64, M, N>,
-        r: &SMatrix<f64, M, M>,
+        prep: Prepared<N, M>,
         gate: GateThreshold,
     ) -> Result<Gate<M>, EstimatorError> {
-        let prep = self.prepare(nu, h, r, true)?;
         if !gate.accepts(prep.nis) {
             return Ok(Gate::Rejected { nis: prep.nis });
         }
         self.apply(nu, prep).map(Gate::Accepted)
     }
 
-    /// Checks `R` (when `check_r`; a [`MeasurementNoise`] is checked already), forms
-    /// `S = H P H^T + R`, factors it and computes the NIS. `nu` and `H` are already
-    /// checked finite.
+    /// Forms `U = P H^T` and `S = H P H^T + R`, factors `S` (`L D L^T`) and computes
+    /// the NIS, then ONE validity test: `R` valid (when `check_r`; a
+    /// [`MeasurementNoise`] is checked already), `S` positive definite and the NIS
+    /// finite. A non-finite `H` or `R` makes `S` fail its factorization, a non-finite
+    /// `z` / `nu` makes the NIS non-finite (see [`linalg::innovation`]). Only when the
+    /// test fails are the inputs checked one by one in the documented order
+    /// (`input_checks`: `z` or `nu`, then `H`; then `R`; then `S`), so the error is the
+    /// same as when checking up front; nothing is modified here.
     #[inline]
     fn prepare<const M: usize>(
         &self,
@@ -397,34 +419,39 @@ impl<const N: usize> KalmanFilter<N> {
         h: &SMatrix<f64, M, N>,
         r: &SMatrix<f64, M, M>,
         check_r: bool,
+        input_checks: impl FnOnce() -> Result<(), EstimatorError>,
     ) -> Result<Prepared<N, M>, EstimatorError> {
-        if check_r {
-            check_covariance("measurement noise R", r)
-                .map_err(|e| EstimatorError::from_core_at(e, self.time))?;
+        // R's test first: its square roots and divisions then overlap with the products
+        let r_ok = !check_r || linalg::covariance_surely_valid(r);
+        let (pht, s) = linalg::innovation(&self.p, h, r);
+        let ldl = linalg::Ldl::new(&s);
+        let nis = ldl.as_ref().map_or(f64::NAN, |l| l.quad_form(nu));
+        if !(r_ok && nis.is_finite()) {
+            input_error(input_checks, r, check_r, self.time)?;
         }
-        let pht = self.p * h.transpose();
-        let s = symmetrize(&(h * pht + r));
-        let s_inv = linalg::spd_inverse(&s).ok_or_else(|| EstimatorError::NotPositiveDefinite {
-            what: "innovation covariance S".into(),
-            time: self.time,
-        })?;
-        let nis = nu.dot(&(s_inv * nu));
-        Ok(Prepared { pht, s, s_inv, nis })
+        let Some(ldl) = ldl else {
+            return Err(EstimatorError::NotPositiveDefinite {
+                what: "innovation covariance S".into(),
+                time: self.time,
+            });
+        };
+        Ok(Prepared { pht, s, ldl, nis })
     }
 
-    /// Gain, Joseph-form covariance, PD check, commit.
+    /// Gain `K = U S^-1` by triangular solves with the factor of `S`, state, Joseph
+    /// covariance, one validity test (`x` finite, `P` positive definite), commit.
     #[inline]
     fn apply<const M: usize>(
         &mut self,
         nu: &SVector<f64, M>,
         prep: Prepared<N, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        // K = P H^T S^-1.
-        let k: SMatrix<f64, N, M> = prep.pht * prep.s_inv;
-        let x_new = self.x + k * nu;
+        let k = prep.ldl.solve_right(&prep.pht);
+        let x_new = self.x + linalg::mat_vec(&k, nu);
         let p_new = linalg::joseph_update(&self.p, &prep.pht, &k, &prep.s);
-        check_finite("updated state x", x_new.as_slice(), N, 1, self.time)?;
-        check_pd("updated covariance P", &p_new, self.time)?;
+        if !(linalg::all_finite(x_new.as_slice()) && linalg::is_positive_definite(&p_new)) {
+            return Err(updated_error(&x_new, &p_new, self.time));
+        }
         self.x = x_new;
         self.p = p_new;
         Ok(UpdateInfo {
@@ -540,8 +567,9 @@ impl<const N: usize> KalmanFilter<N> {
             x += k * m.innovation;
             p = linalg::joseph_update_scalar(&p, &pht, &k, s);
         }
-        check_finite("updated state x", x.as_slice(), N, 1, t)?;
-        check_pd("updated covariance P", &p, t)?;
+        if !(linalg::all_finite(x.as_slice()) && linalg::is_positive_definite(&p)) {
+            return Err(updated_error(&x, &p, t));
+        }
         self.x = x;
         self.p = p;
         Ok(SequentialReport { outcomes })
@@ -563,7 +591,17 @@ impl<const N: usize> KalmanFilter<N> {
     }
 }
 
+#[inline]
 fn check_time(what: &str, new_time: Time, current: Time) -> Result<(), EstimatorError> {
+    if new_time.is_finite() && new_time >= current {
+        return Ok(());
+    }
+    time_error(what, new_time, current)
+}
+
+#[cold]
+#[inline(never)]
+fn time_error(what: &str, new_time: Time, current: Time) -> Result<(), EstimatorError> {
     if !new_time.is_finite() {
         return Err(EstimatorError::NonFinite {
             what: format!("{what}: time"),
@@ -582,6 +620,84 @@ fn check_time(what: &str, new_time: Time, current: Time) -> Result<(), Estimator
     Ok(())
 }
 
+/// The error of a failed prediction test: the checks in their documented order.
+#[cold]
+#[inline(never)]
+fn prediction_error<const N: usize>(
+    input_checks: impl FnOnce() -> Result<(), EstimatorError>,
+    x_pred: &SVector<f64, N>,
+    q: &SMatrix<f64, N, N>,
+    p_pred: &SMatrix<f64, N, N>,
+    time: Time,
+) -> EstimatorError {
+    input_checks()
+        .and_then(|()| check_finite("predicted state x", x_pred.as_slice(), N, 1, time))
+        .and_then(|()| check_process_noise(q, time))
+        .and_then(|()| check_pd("predicted covariance P", p_pred, time))
+        .err()
+        // unreachable: the fast test fails only if one of the checks does
+        .unwrap_or_else(|| EstimatorError::NotPositiveDefinite {
+            what: "predicted covariance P".into(),
+            time,
+        })
+}
+
+/// `z` (named "measurement z") and `H` finite.
+fn measurement_checks<const N: usize, const M: usize>(
+    z: &SVector<f64, M>,
+    h: &SMatrix<f64, M, N>,
+    time: Time,
+) -> Result<(), EstimatorError> {
+    check_finite("measurement z", z.as_slice(), M, 1, time)?;
+    check_finite("measurement matrix H", h.as_slice(), M, N, time)
+}
+
+/// `nu` (named "innovation nu") and `H` finite.
+fn innovation_checks<const N: usize, const M: usize>(
+    nu: &SVector<f64, M>,
+    h: &SMatrix<f64, M, N>,
+    time: Time,
+) -> Result<(), EstimatorError> {
+    check_finite("innovation nu", nu.as_slice(), M, 1, time)?;
+    check_finite("measurement matrix H", h.as_slice(), M, N, time)
+}
+
+/// The input checks of an update in their documented order (`z` / `nu`, `H`, then
+/// `R` when `check_r`); `Ok` when they all pass.
+#[cold]
+#[inline(never)]
+fn input_error<const M: usize>(
+    input_checks: impl FnOnce() -> Result<(), EstimatorError>,
+    r: &SMatrix<f64, M, M>,
+    check_r: bool,
+    time: Time,
+) -> Result<(), EstimatorError> {
+    input_checks()?;
+    if check_r {
+        check_covariance("measurement noise R", r)
+            .map_err(|e| EstimatorError::from_core_at(e, time))?;
+    }
+    Ok(())
+}
+
+/// The error of a failed test of an updated estimate.
+#[cold]
+#[inline(never)]
+fn updated_error<const N: usize>(
+    x: &SVector<f64, N>,
+    p: &SMatrix<f64, N, N>,
+    time: Time,
+) -> EstimatorError {
+    check_finite("updated state x", x.as_slice(), N, 1, time)
+        .and_then(|()| check_pd("updated covariance P", p, time))
+        .err()
+        // unreachable: the fast test fails only if one of the checks does
+        .unwrap_or_else(|| EstimatorError::NotPositiveDefinite {
+            what: "updated covariance P".into(),
+            time,
+        })
+}
+
 /// Finite entries of a fixed-size matrix stored column-major in `data` (`rows x
 /// cols`): a vectorizable fast path, and the row-major index of the first non-finite
 /// entry (as [`check_finite_entries`]) only when there is one.
@@ -593,7 +709,7 @@ fn check_finite(
     cols: usize,
     time: Time,
 ) -> Result<(), EstimatorError> {
-    if data.iter().all(|v| v.is_finite()) {
+    if linalg::all_finite(data) {
         return Ok(());
     }
     check_finite_entries(what, rows, cols, |r, c| data[c * rows + r], time)
@@ -1173,6 +1289,239 @@ mod tests {
         assert_eq!(seen[0], Vector2::new(3.0, 4.0));
         assert!(seen[1].norm() > 5.0);
         assert!(kf.state().norm() > seen[1].norm());
+    }
+
+    /// The checks of `predict` one by one in their documented order (time, `F`,
+    /// `x_pred`, `Q`, predicted `P`): what the code did before they were fused into
+    /// one test with a search on failure.
+    fn predict_oracle(
+        kf: &KalmanFilter<3>,
+        f: &Matrix3<f64>,
+        q: &Matrix3<f64>,
+        t: Time,
+    ) -> Result<(), EstimatorError> {
+        check_time("predict", t, kf.time())?;
+        check_finite("transition matrix F", f.as_slice(), 3, 3, t)?;
+        let x_pred = f * kf.state();
+        check_finite("predicted state x", x_pred.as_slice(), 3, 1, t)?;
+        check_process_noise(q, t)?;
+        let p = f * kf.covariance() * f.transpose() + q;
+        check_pd("predicted covariance P", &symmetrize(&p), t)
+    }
+
+    /// The checks of `update` one by one in their documented order (`z`, `H`, `R`,
+    /// `S`); the updated estimate cannot fail for these inputs.
+    fn update_oracle(
+        kf: &KalmanFilter<3>,
+        z: &Vector2<f64>,
+        h: &SMatrix<f64, 2, 3>,
+        r: &Matrix2<f64>,
+    ) -> Result<(), EstimatorError> {
+        let t = kf.time();
+        check_finite("measurement z", z.as_slice(), 2, 1, t)?;
+        check_finite("measurement matrix H", h.as_slice(), 2, 3, t)?;
+        check_covariance("measurement noise R", r)
+            .map_err(|e| EstimatorError::from_core_at(e, t))?;
+        let s = h * kf.covariance() * h.transpose() + r;
+        if linalg::Ldl::new(&symmetrize(&s)).is_none() {
+            return Err(EstimatorError::NotPositiveDefinite {
+                what: "innovation covariance S".into(),
+                time: t,
+            });
+        }
+        Ok(())
+    }
+
+    /// Same `Ok` / same error (compared by `Debug`, so that a NaN `value` compares
+    /// equal), and an unchanged filter on error.
+    fn assert_same<T: std::fmt::Debug>(
+        got: Result<T, EstimatorError>,
+        expected: Result<(), EstimatorError>,
+        after: &KalmanFilter<3>,
+        before: &KalmanFilter<3>,
+        case: &str,
+    ) {
+        match (&got, &expected) {
+            (Ok(_), Ok(())) => {}
+            (Err(g), Err(e)) => {
+                assert_eq!(format!("{g:?}"), format!("{e:?}"), "{case}");
+                assert_eq!(after, before, "{case}: the filter changed on error");
+            }
+            _ => panic!("{case}: got {got:?}, expected {expected:?}"),
+        }
+    }
+
+    /// Every entry of every input, set to NaN, +inf or -inf, and the other invalid
+    /// inputs (asymmetric or indefinite `Q` / `R`, singular `F` with `Q = 0`): the fused
+    /// checks report exactly the error of checking each input up front, and leave the
+    /// filter unchanged.
+    #[test]
+    fn fused_checks_report_the_same_errors_as_checking_up_front() {
+        let p0 = Matrix3::new(2.0, 0.3, 0.1, 0.3, 1.0, 0.2, 0.1, 0.2, 0.5);
+        let kf = KalmanFilter::new(
+            Gaussian::new(Vector3::new(1.0, -2.0, 0.5), p0).unwrap(),
+            1.0,
+        )
+        .unwrap();
+        let f = Matrix3::new(1.0, 0.1, 0.0, 0.0, 1.0, 0.1, 0.0, 0.0, 1.0);
+        let q = Matrix3::new(0.01, 0.002, 0.0, 0.002, 0.02, 0.001, 0.0, 0.001, 0.03);
+        let h = SMatrix::<f64, 2, 3>::new(1.0, 0.0, 0.5, 0.0, 1.0, 0.0);
+        let r = Matrix2::new(0.25, 0.05, 0.05, 0.5);
+        let z = Vector2::new(1.2, -1.9);
+        let bad_values = [f64::NAN, f64::INFINITY, f64::NEG_INFINITY];
+        let mut cases = 0;
+
+        let mut check_predict = |f: &Matrix3<f64>, q: &Matrix3<f64>, t: Time, case: &str| {
+            let mut a = kf.clone();
+            assert_same(
+                a.predict(f, q, t),
+                predict_oracle(&kf, f, q, t),
+                &a,
+                &kf,
+                case,
+            );
+            // the other prediction flavours with the same F and Q
+            let mut b = kf.clone();
+            let x_pred = f * kf.state();
+            let expected = check_time("predict", t, kf.time())
+                .and_then(|()| check_finite("transition Jacobian F", f.as_slice(), 3, 3, t))
+                .and_then(|()| check_finite("predicted state x", x_pred.as_slice(), 3, 1, t))
+                .and_then(|()| check_process_noise(q, t))
+                .and_then(|()| predict_oracle(&kf, f, q, t));
+            assert_same(
+                b.predict_nonlinear(&x_pred, f, q, t),
+                expected,
+                &b,
+                &kf,
+                case,
+            );
+            cases += 1;
+        };
+        for i in 0..9 {
+            for v in bad_values {
+                let mut fb = f;
+                fb[(i / 3, i % 3)] = v;
+                check_predict(&fb, &q, 2.0, &format!("F[{i}] = {v}"));
+                let mut qb = q;
+                qb[(i / 3, i % 3)] = v;
+                check_predict(&f, &qb, 2.0, &format!("Q[{i}] = {v}"));
+                // both a bad F and a bad Q: F is named first
+                check_predict(&fb, &qb, 2.0, &format!("F and Q [{i}] = {v}"));
+            }
+        }
+        let mut q_asym = q;
+        q_asym[(2, 0)] += 1e-4;
+        check_predict(&f, &q_asym, 2.0, "asymmetric Q");
+        let mut q_neg = q;
+        q_neg[(1, 1)] = -1e-6;
+        check_predict(&f, &q_neg, 2.0, "negative Q diagonal");
+        let q_indef = Matrix3::new(0.0, 5.0, 0.0, 5.0, 0.0, 0.0, 0.0, 0.0, 0.0);
+        check_predict(&f, &q_indef, 2.0, "indefinite Q");
+        check_predict(&Matrix3::zeros(), &Matrix3::zeros(), 2.0, "F = 0, Q = 0");
+        check_predict(
+            &Matrix3::new(1.0, 1.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0, 1.0),
+            &Matrix3::zeros(),
+            2.0,
+            "singular F, Q = 0",
+        );
+        check_predict(&f, &q, 0.5, "time backwards");
+        check_predict(&f, &q, f64::NAN, "NaN time");
+        check_predict(&(f * 1e200), &q, 2.0, "overflowing F");
+        check_predict(&f, &q, 2.0, "valid");
+
+        // control input: B and u are checked after F
+        for i in 0..3 {
+            for v in bad_values {
+                let (mut b, mut u) = (Vector3::new(0.5, 0.1, 1.0), Vector1::new(2.0));
+                b[i] = v;
+                let mut a = kf.clone();
+                let got = a.predict_with_control(&f, &b, &u, &q, 2.0);
+                let expected = check_finite("control matrix B", b.as_slice(), 3, 1, 2.0);
+                assert_same(got, expected, &a, &kf, &format!("B[{i}] = {v}"));
+                b[i] = 0.5;
+                u[0] = v;
+                let got = a.predict_with_control(&f, &b, &u, &q, 2.0);
+                let expected = check_finite("control input u", u.as_slice(), 1, 1, 2.0);
+                assert_same(got, expected, &a, &kf, &format!("u = {v}"));
+                cases += 2;
+            }
+        }
+
+        let mut check_update =
+            |z: &Vector2<f64>, h: &SMatrix<f64, 2, 3>, r: &Matrix2<f64>, case: &str| {
+                let expected = update_oracle(&kf, z, h, r);
+                let mut a = kf.clone();
+                assert_same(a.update(z, h, r), expected.clone(), &a, &kf, case);
+                // gated: an error, never a rejection, for invalid inputs
+                let gate = GateThreshold::from_sigma_distance(3.0).unwrap();
+                let mut g = kf.clone();
+                assert_same(
+                    g.update_gated(z, h, r, gate),
+                    expected.clone(),
+                    &g,
+                    &kf,
+                    case,
+                );
+                // with a given innovation: the same checks, naming "innovation nu"
+                let nu = z - h * kf.state();
+                let expected_nu = check_finite("innovation nu", nu.as_slice(), 2, 1, kf.time())
+                    .and_then(|()| update_oracle(&kf, &Vector2::zeros(), h, r));
+                let mut b = kf.clone();
+                assert_same(
+                    b.update_with_innovation(&nu, h, r),
+                    expected_nu,
+                    &b,
+                    &kf,
+                    case,
+                );
+                // with a checked R: R is not re-checked
+                if let Ok(noise) = MeasurementNoise::new(*r) {
+                    let mut c = kf.clone();
+                    assert_same(
+                        c.update_with_noise(z, h, &noise),
+                        expected.clone(),
+                        &c,
+                        &kf,
+                        case,
+                    );
+                }
+                cases += 1;
+            };
+        for i in 0..6 {
+            for v in bad_values {
+                let mut hb = h;
+                hb[(i / 3, i % 3)] = v;
+                check_update(&z, &hb, &r, &format!("H[{i}] = {v}"));
+                let mut zb = z;
+                zb[i % 2] = v;
+                check_update(&zb, &h, &r, &format!("z[{}] = {v}", i % 2));
+                check_update(&zb, &hb, &r, &format!("z and H [{i}] = {v}"));
+                let mut rb = r;
+                rb[(i % 4 / 2, i % 2)] = v;
+                check_update(&z, &h, &rb, &format!("R[{}] = {v}", i % 4));
+                check_update(&z, &hb, &rb, &format!("H and R [{i}] = {v}"));
+            }
+        }
+        check_update(&z, &h, &Matrix2::new(0.25, 0.05, 0.06, 0.5), "asymmetric R");
+        check_update(&z, &h, &Matrix2::new(0.25, 0.5, 0.5, 0.5), "indefinite R");
+        check_update(&z, &h, &Matrix2::new(0.25, 0.0, 0.0, 0.0), "singular R");
+        check_update(&z, &h, &Matrix2::new(-1.0, 0.0, 0.0, -1.0), "negative R");
+        check_update(
+            &z,
+            &h,
+            &Matrix2::new(1e120, 0.0, 0.0, 1e120),
+            "huge R (declined by the fast test, valid)",
+        );
+        let c = 1.0 - 1e-12;
+        check_update(
+            &z,
+            &h,
+            &Matrix2::new(1.0, c, c, 1.0),
+            "nearly singular R (declined by the fast test, valid)",
+        );
+        check_update(&(z * 1e300), &h, &r, "huge z (NIS overflows, not an error)");
+        check_update(&z, &h, &r, "valid");
+        assert!(cases >= 200, "{cases}");
     }
 
     proptest! {
