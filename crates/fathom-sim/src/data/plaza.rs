@@ -485,10 +485,22 @@ fn check_increasing(
 /// strictly increasing, no rows.
 pub fn read_odometry(path: impl AsRef<Path>) -> Result<Vec<OdometryStep>, PlazaError> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    parse_odometry(&read_text(path)?, path)
+}
+
+/// Parses the text of an odometry file; `label` (normally the file's path) names the
+/// file in errors.
+///
+/// # Errors
+/// As [`read_odometry`], without I/O.
+pub fn parse_odometry(
+    text: &str,
+    label: impl AsRef<Path>,
+) -> Result<Vec<OdometryStep>, PlazaError> {
+    let path = label.as_ref();
     let mut out = Vec::new();
     let mut previous = None;
-    for (line, f) in rows(path, &text, 3)? {
+    for (line, f) in rows(path, text, 3)? {
         let place = Place::Line(line);
         let time = number(path, &place, 1, "time_s", f[0])?;
         let delta_distance = number(path, &place, 2, "delta_distance_m", f[1])?;
@@ -518,12 +530,26 @@ pub fn read_ranges(
     order: RangeOrder,
 ) -> Result<(Vec<RangeRecord>, Vec<usize>), PlazaError> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    parse_ranges(&read_text(path)?, path, beacons, order)
+}
+
+/// Parses the text of a range file; `label` (normally the file's path) names the file
+/// in errors.
+///
+/// # Errors
+/// As [`read_ranges`], without I/O.
+pub fn parse_ranges(
+    text: &str,
+    label: impl AsRef<Path>,
+    beacons: &[BeaconSite],
+    order: RangeOrder,
+) -> Result<(Vec<RangeRecord>, Vec<usize>), PlazaError> {
+    let path = label.as_ref();
     let index: BTreeMap<i64, usize> = beacons.iter().enumerate().map(|(k, b)| (b.id, k)).collect();
     let mut out = Vec::new();
     let mut breaks = Vec::new();
     let mut previous: Option<f64> = None;
-    for (line, f) in rows(path, &text, 4)? {
+    for (line, f) in rows(path, text, 4)? {
         let place = Place::Line(line);
         let time = number(path, &place, 1, "time_s", f[0])?;
         let sender = number(path, &place, 2, "sender_id", f[1])?;
@@ -681,7 +707,17 @@ pub fn read_mat(path: impl AsRef<Path>) -> Result<PlazaMat, PlazaError> {
         path: path.to_path_buf(),
         source,
     })?;
-    let mat = matfile::MatFile::parse(bytes.as_slice()).map_err(|e| PlazaError::Mat {
+    parse_mat(&bytes, path)
+}
+
+/// Parses the bytes of a Plaza `.mat` file; `label` (normally the file's path) names
+/// the file in errors.
+///
+/// # Errors
+/// As [`read_mat`], without I/O.
+pub fn parse_mat(bytes: &[u8], label: impl AsRef<Path>) -> Result<PlazaMat, PlazaError> {
+    let path = label.as_ref();
+    let mat = matfile::MatFile::parse(bytes).map_err(|e| PlazaError::Mat {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;
