@@ -9,6 +9,7 @@ mod support;
 mod beacons;
 mod cli;
 mod fusion;
+mod fuzz_corpus;
 mod noise;
 mod plaza;
 mod vkf;
