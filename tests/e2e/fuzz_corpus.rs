@@ -4,6 +4,8 @@
 //! so the fuzzers' findings stay fixed in a plain `cargo test` without cargo-fuzz.
 //! Regression inputs must also give exactly the outcome stored beside them in
 //! `<input>.expected` (one line per outcome: the error now returned, or `ok ...`).
+//! `FATHOM_FUZZ_BLESS=1 cargo test --test e2e fuzz_corpus` writes missing snapshots
+//! for new regression inputs (read them before committing).
 
 use std::path::{Path, PathBuf};
 
@@ -61,6 +63,9 @@ fn every_fuzz_regression_gives_its_expected_error() {
             total += 1;
             let got = run(&std::fs::read(&f).unwrap()).join("\n");
             let snapshot = PathBuf::from(format!("{}.expected", f.display()));
+            if std::env::var_os("FATHOM_FUZZ_BLESS").is_some() && !snapshot.exists() {
+                std::fs::write(&snapshot, format!("{got}\n")).unwrap();
+            }
             let expected = std::fs::read_to_string(&snapshot)
                 .unwrap_or_else(|_| panic!("{} has no .expected snapshot", f.display()));
             if got != expected.trim_end() {

@@ -22,6 +22,8 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use crate::data::matv5::{MatArray, MatClass, read_mat_v5};
+
 /// Where in a file an error sits.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Place {
@@ -618,18 +620,29 @@ pub struct PlazaMat {
 /// A matrix of the `.mat` file as rows.
 fn mat_rows(
     path: &Path,
-    mat: &matfile::MatFile,
+    arrays: &[MatArray],
     name: &'static str,
     cols: usize,
 ) -> Result<Vec<Vec<f64>>, PlazaError> {
-    let Some(array) = mat.find_by_name(name) else {
+    let Some(array) = arrays.iter().find(|a| a.name == name) else {
         return Err(PlazaError::MissingMatrix {
             path: path.to_path_buf(),
             name,
-            found: mat.arrays().iter().map(|a| a.name().to_string()).collect(),
+            found: arrays
+                .iter()
+                .filter(|a| !matches!(a.class, MatClass::Other(_)))
+                .map(|a| a.name.clone())
+                .collect(),
         });
     };
-    let size = array.size();
+    if let MatClass::Integer(class) | MatClass::Other(class) = array.class {
+        return Err(PlazaError::MatrixShape {
+            path: path.to_path_buf(),
+            name,
+            reason: format!("expected a double matrix, found MAT class {class}"),
+        });
+    }
+    let size = &array.dims;
     if size.len() != 2 || size[1] != cols {
         return Err(PlazaError::MatrixShape {
             path: path.to_path_buf(),
@@ -644,26 +657,17 @@ fn mat_rows(
             matrix: Some(name.to_string()),
         });
     }
-    let real: Vec<f64> = match array.data() {
-        matfile::NumericData::Double { real, .. } => real.clone(),
-        matfile::NumericData::Single { real, .. } => real.iter().map(|&v| f64::from(v)).collect(),
-        other => {
-            return Err(PlazaError::MatrixShape {
-                path: path.to_path_buf(),
-                name,
-                reason: format!(
-                    "expected a double matrix, found {}",
-                    format!("{other:?}")
-                        .split_whitespace()
-                        .next()
-                        .unwrap_or("another class")
-                ),
-            });
-        }
-    };
+    // The reader guarantees one value per element; checked again before indexing.
+    if n.checked_mul(cols) != Some(array.real.len()) {
+        return Err(PlazaError::MatrixShape {
+            path: path.to_path_buf(),
+            name,
+            reason: format!("{} values for {n} x {cols}", array.real.len()),
+        });
+    }
     // Column-major storage.
     Ok((0..n)
-        .map(|r| (0..cols).map(|c| real[c * n + r]).collect())
+        .map(|r| (0..cols).map(|c| array.real[c * n + r]).collect())
         .collect())
 }
 
@@ -717,7 +721,7 @@ pub fn read_mat(path: impl AsRef<Path>) -> Result<PlazaMat, PlazaError> {
 /// As [`read_mat`], without I/O.
 pub fn parse_mat(bytes: &[u8], label: impl AsRef<Path>) -> Result<PlazaMat, PlazaError> {
     let path = label.as_ref();
-    let mat = matfile::MatFile::parse(bytes).map_err(|e| PlazaError::Mat {
+    let mat = read_mat_v5(bytes).map_err(|e| PlazaError::Mat {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;
