@@ -10,6 +10,7 @@ mod beacons;
 mod cli;
 mod determinism;
 mod fusion;
+mod fuzz_corpus;
 mod hardening;
 mod noise;
 mod plaza;

@@ -164,7 +164,16 @@ impl FusionMissionParams {
         if self.n_course_changes == 0 {
             return Err(invalid("n_course_changes", "must be at least 1"));
         }
-        let knots_needed = 2 * self.n_course_changes + 5;
+        let Some(knots_needed) = self
+            .n_course_changes
+            .checked_mul(2)
+            .and_then(|n| n.checked_add(5))
+        else {
+            return Err(invalid(
+                "n_course_changes",
+                format!("{} is too large", self.n_course_changes),
+            ));
+        };
         if self.n_knots != knots_needed {
             return Err(invalid(
                 "n_knots",
@@ -473,6 +482,18 @@ mod tests {
     fn mission(seed: u64) -> FusionMission {
         let params = FusionMissionParams::default().check().unwrap();
         generate_fusion_mission(&params, &mut ChaCha8Rng::seed_from_u64(seed)).unwrap()
+    }
+
+    /// Found by fuzzing the scenario checks: a huge course-change count is an error,
+    /// not an overflow in the knot count.
+    #[test]
+    fn huge_course_change_count_is_an_error() {
+        let params = FusionMissionParams {
+            n_course_changes: usize::MAX / 2,
+            ..FusionMissionParams::default()
+        };
+        let e = params.check().unwrap_err().to_string();
+        assert!(e.contains("is too large"), "{e}");
     }
 
     #[test]

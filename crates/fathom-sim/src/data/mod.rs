@@ -2,9 +2,10 @@
 //!
 //! - [`plaza`]: the CMU Plaza range-only data sets (`*_DR.txt` odometry, `*_TD.txt`
 //!   ranges, `*_.mat` ground truth, beacon survey and dead-reckoned path);
-//! - [`matv5`]: writing numeric matrices as an uncompressed MATLAB v5 file (tests and
-//!   tools that need to make a modified copy of a `.mat` file; reading goes through the
-//!   `matfile` crate).
+//! - [`matv5`]: reading the numeric matrices of a MATLAB v5 file (plain or
+//!   zlib-compressed elements; bounded and panic-free on malformed files, fuzzed), and
+//!   writing numeric matrices as an uncompressed MATLAB v5 file (tests and tools that
+//!   need to make a modified copy of a `.mat` file).
 //!
 //! Every error names the file and, for text files, the 1-based line (for `.mat`
 //! matrices, the matrix and its 1-based row).

@@ -22,6 +22,8 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use crate::data::matv5::{MatArray, MatClass, read_mat_v5};
+
 /// Where in a file an error sits.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Place {
@@ -485,10 +487,22 @@ fn check_increasing(
 /// strictly increasing, no rows.
 pub fn read_odometry(path: impl AsRef<Path>) -> Result<Vec<OdometryStep>, PlazaError> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    parse_odometry(&read_text(path)?, path)
+}
+
+/// Parses the text of an odometry file; `label` (normally the file's path) names the
+/// file in errors.
+///
+/// # Errors
+/// As [`read_odometry`], without I/O.
+pub fn parse_odometry(
+    text: &str,
+    label: impl AsRef<Path>,
+) -> Result<Vec<OdometryStep>, PlazaError> {
+    let path = label.as_ref();
     let mut out = Vec::new();
     let mut previous = None;
-    for (line, f) in rows(path, &text, 3)? {
+    for (line, f) in rows(path, text, 3)? {
         let place = Place::Line(line);
         let time = number(path, &place, 1, "time_s", f[0])?;
         let delta_distance = number(path, &place, 2, "delta_distance_m", f[1])?;
@@ -518,12 +532,26 @@ pub fn read_ranges(
     order: RangeOrder,
 ) -> Result<(Vec<RangeRecord>, Vec<usize>), PlazaError> {
     let path = path.as_ref();
-    let text = read_text(path)?;
+    parse_ranges(&read_text(path)?, path, beacons, order)
+}
+
+/// Parses the text of a range file; `label` (normally the file's path) names the file
+/// in errors.
+///
+/// # Errors
+/// As [`read_ranges`], without I/O.
+pub fn parse_ranges(
+    text: &str,
+    label: impl AsRef<Path>,
+    beacons: &[BeaconSite],
+    order: RangeOrder,
+) -> Result<(Vec<RangeRecord>, Vec<usize>), PlazaError> {
+    let path = label.as_ref();
     let index: BTreeMap<i64, usize> = beacons.iter().enumerate().map(|(k, b)| (b.id, k)).collect();
     let mut out = Vec::new();
     let mut breaks = Vec::new();
     let mut previous: Option<f64> = None;
-    for (line, f) in rows(path, &text, 4)? {
+    for (line, f) in rows(path, text, 4)? {
         let place = Place::Line(line);
         let time = number(path, &place, 1, "time_s", f[0])?;
         let sender = number(path, &place, 2, "sender_id", f[1])?;
@@ -592,18 +620,29 @@ pub struct PlazaMat {
 /// A matrix of the `.mat` file as rows.
 fn mat_rows(
     path: &Path,
-    mat: &matfile::MatFile,
+    arrays: &[MatArray],
     name: &'static str,
     cols: usize,
 ) -> Result<Vec<Vec<f64>>, PlazaError> {
-    let Some(array) = mat.find_by_name(name) else {
+    let Some(array) = arrays.iter().find(|a| a.name == name) else {
         return Err(PlazaError::MissingMatrix {
             path: path.to_path_buf(),
             name,
-            found: mat.arrays().iter().map(|a| a.name().to_string()).collect(),
+            found: arrays
+                .iter()
+                .filter(|a| !matches!(a.class, MatClass::Other(_)))
+                .map(|a| a.name.clone())
+                .collect(),
         });
     };
-    let size = array.size();
+    if let MatClass::Integer(class) | MatClass::Other(class) = array.class {
+        return Err(PlazaError::MatrixShape {
+            path: path.to_path_buf(),
+            name,
+            reason: format!("expected a double matrix, found MAT class {class}"),
+        });
+    }
+    let size = &array.dims;
     if size.len() != 2 || size[1] != cols {
         return Err(PlazaError::MatrixShape {
             path: path.to_path_buf(),
@@ -618,26 +657,17 @@ fn mat_rows(
             matrix: Some(name.to_string()),
         });
     }
-    let real: Vec<f64> = match array.data() {
-        matfile::NumericData::Double { real, .. } => real.clone(),
-        matfile::NumericData::Single { real, .. } => real.iter().map(|&v| f64::from(v)).collect(),
-        other => {
-            return Err(PlazaError::MatrixShape {
-                path: path.to_path_buf(),
-                name,
-                reason: format!(
-                    "expected a double matrix, found {}",
-                    format!("{other:?}")
-                        .split_whitespace()
-                        .next()
-                        .unwrap_or("another class")
-                ),
-            });
-        }
-    };
+    // The reader guarantees one value per element; checked again before indexing.
+    if n.checked_mul(cols) != Some(array.real.len()) {
+        return Err(PlazaError::MatrixShape {
+            path: path.to_path_buf(),
+            name,
+            reason: format!("{} values for {n} x {cols}", array.real.len()),
+        });
+    }
     // Column-major storage.
     Ok((0..n)
-        .map(|r| (0..cols).map(|c| real[c * n + r]).collect())
+        .map(|r| (0..cols).map(|c| array.real[c * n + r]).collect())
         .collect())
 }
 
@@ -681,7 +711,17 @@ pub fn read_mat(path: impl AsRef<Path>) -> Result<PlazaMat, PlazaError> {
         path: path.to_path_buf(),
         source,
     })?;
-    let mat = matfile::MatFile::parse(bytes.as_slice()).map_err(|e| PlazaError::Mat {
+    parse_mat(&bytes, path)
+}
+
+/// Parses the bytes of a Plaza `.mat` file; `label` (normally the file's path) names
+/// the file in errors.
+///
+/// # Errors
+/// As [`read_mat`], without I/O.
+pub fn parse_mat(bytes: &[u8], label: impl AsRef<Path>) -> Result<PlazaMat, PlazaError> {
+    let path = label.as_ref();
+    let mat = read_mat_v5(bytes).map_err(|e| PlazaError::Mat {
         path: path.to_path_buf(),
         reason: e.to_string(),
     })?;

@@ -276,7 +276,8 @@ impl FusionScenario {
         }
         let mission = FusionMissionParams {
             duration: m.duration_s,
-            n_knots: 2 * m.n_course_changes + 5,
+            // Saturating: a count too large for the pattern is refused by `check`.
+            n_knots: m.n_course_changes.saturating_mul(2).saturating_add(5),
             n_course_changes: m.n_course_changes,
             search_depth: m.search_depth_m,
             depth_tolerance: m.depth_tolerance_m,

@@ -291,7 +291,8 @@ pub struct Checked {
 fn integer_ratio(file: &str, key: &str, a: f64, b: f64) -> Result<usize, SimError> {
     require_positive(file, key, b)?;
     let r = a / b;
-    if (r - r.round()).abs() > 1e-9 || r.round() < 1.0 {
+    // Not finite (a NaN or zero rate): NaN compares false below and would cast to 0.
+    if !r.is_finite() || (r - r.round()).abs() > 1e-9 || r.round() < 1.0 {
         return Err(SimError::invalid(
             file,
             key,
