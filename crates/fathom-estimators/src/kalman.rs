@@ -421,7 +421,7 @@ impl<const N: usize> KalmanFilter<N> {
         check_r: bool,
         input_checks: impl FnOnce() -> Result<(), EstimatorError>,
     ) -> Result<Prepared<N, M>, EstimatorError> {
-        // R's test first: its square roots and divisions then overlap with the products
+        // R's test first (independent of P): it overlaps with the products below
         let r_ok = !check_r || linalg::covariance_surely_valid(r);
         let (pht, s) = linalg::innovation(&self.p, h, r);
         let ldl = linalg::Ldl::new(&s);
