@@ -1,4 +1,5 @@
-//! Per-step cost of the estimators (criterion): KF predict+update (6/3 and 9/3),
+//! Per-step cost of the estimators (criterion): KF predict+update (6/3 and 9/3;
+//! 6/3 also with `R` checked once and as sequential scalar updates with a diagonal `R`),
 //! one EKF range update, one AS / SC / SI epoch of the beacons filter, one 15-state
 //! error-state prediction. Run with `cargo xtask bench` (or `cargo bench -p
 //! fathom-estimators`); see `docs/performance.md`.
@@ -21,7 +22,7 @@ use fathom_estimators::{
     models,
     schemes::{Event, Observation, SchemeFilter, SchemeParams, UpdateScheme},
 };
-use nalgebra::{DMatrix, Matrix3, Matrix4, SMatrix, SVector, Vector3, Vector4};
+use nalgebra::{DMatrix, Matrix3, Matrix4, RowSVector, SMatrix, SVector, Vector3, Vector4};
 
 const DT: f64 = 0.1;
 
@@ -63,6 +64,25 @@ impl<const N: usize, const M: usize> Problem<N, M> {
         black_box(
             kf.update_with_noise(black_box(&self.z), black_box(&self.h), black_box(noise))
                 .unwrap(),
+        );
+    }
+
+    /// [`Problem::step`] with a diagonal `R` (the diagonal of `self.r`) as `M` scalar
+    /// Joseph updates (`update_sequential_scalar`, `O(N^2)` each).
+    #[inline(always)]
+    fn step_sequential(&self, kf: &mut KalmanFilter<N>, t: &mut f64, rows: &[RowSVector<f64, N>]) {
+        *t += DT;
+        kf.predict(black_box(&self.f), black_box(&self.q), *t)
+            .unwrap();
+        let r_diag: [f64; M] = std::array::from_fn(|i| self.r[(i, i)]);
+        black_box(
+            kf.update_sequential_scalar(
+                black_box(self.z.as_slice()),
+                black_box(rows),
+                black_box(&r_diag),
+                None,
+            )
+            .unwrap(),
         );
     }
 
@@ -150,6 +170,11 @@ fn kf_6_3(c: &mut Criterion) {
     c.bench_function("kf_6x3_predict_update_checked_r", |b| {
         b.iter(|| pb.step_checked_r(&mut kf, &mut t, &noise))
     });
+    let rows: Vec<RowSVector<f64, 6>> = (0..3).map(|i| pb.h.row(i).into_owned()).collect();
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    c.bench_function("kf_6x3_predict_update_sequential_diag_r", |b| {
+        b.iter(|| pb.step_sequential(&mut kf, &mut t, &rows))
+    });
 }
 
 fn kf_9_3(c: &mut Criterion) {
@@ -174,6 +199,15 @@ fn callgrind_kf_6x3_checked_r(pb: &Problem<6, 3>, n: usize) {
     let noise = MeasurementNoise::new(pb.r).unwrap();
     for _ in 0..n {
         pb.step_checked_r(&mut kf, &mut t, &noise);
+    }
+}
+
+#[inline(never)]
+fn callgrind_kf_6x3_sequential(pb: &Problem<6, 3>, n: usize) {
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    let rows: Vec<RowSVector<f64, 6>> = (0..3).map(|i| pb.h.row(i).into_owned()).collect();
+    for _ in 0..n {
+        pb.step_sequential(&mut kf, &mut t, &rows);
     }
 }
 
@@ -419,6 +453,7 @@ fn main() {
         // Fixed work for instruction counting (see the module docs); no criterion.
         callgrind_kf_6x3(&cv_6_3(), n);
         callgrind_kf_6x3_checked_r(&cv_6_3(), n);
+        callgrind_kf_6x3_sequential(&cv_6_3(), n);
         callgrind_reference_6x3(&cv_6_3(), n);
         callgrind_kf_9x3(&ca_9_3(), n);
         return;

@@ -258,7 +258,7 @@ impl<const N: usize> KalmanFilter<N> {
     /// [`linalg::propagate_covariance`]); only when it fails are the checks run one by
     /// one in the documented order (`input_checks` first: `F`, `B`, `u`), to return
     /// the same error as checking each input up front.
-    #[inline]
+    #[inline(always)]
     fn predict_core(
         &mut self,
         x_pred: SVector<f64, N>,
@@ -412,7 +412,7 @@ impl<const N: usize> KalmanFilter<N> {
     /// test fails are the inputs checked one by one in the documented order
     /// (`input_checks`: `z` or `nu`, then `H`; then `R`; then `S`), so the error is the
     /// same as when checking up front; nothing is modified here.
-    #[inline]
+    #[inline(always)]
     fn prepare<const M: usize>(
         &self,
         nu: &SVector<f64, M>,
@@ -421,7 +421,7 @@ impl<const N: usize> KalmanFilter<N> {
         check_r: bool,
         input_checks: impl FnOnce() -> Result<(), EstimatorError>,
     ) -> Result<Prepared<N, M>, EstimatorError> {
-        // R's test first: its square roots and divisions then overlap with the products
+        // R's test first (independent of P): it overlaps with the products below
         let r_ok = !check_r || linalg::covariance_surely_valid(r);
         let (pht, s) = linalg::innovation(&self.p, h, r);
         let ldl = linalg::Ldl::new(&s);
@@ -440,7 +440,7 @@ impl<const N: usize> KalmanFilter<N> {
 
     /// Gain `K = U S^-1` by triangular solves with the factor of `S`, state, Joseph
     /// covariance, one validity test (`x` finite, `P` positive definite), commit.
-    #[inline]
+    #[inline(always)]
     fn apply<const M: usize>(
         &mut self,
         nu: &SVector<f64, M>,
