@@ -2,11 +2,11 @@
 //! data (seed 003 sensor suite), with a negative control that must fail.
 
 use fathom::estimators::schemes::UpdateScheme;
-use fathom::sensors::{BeaconSuiteParams, NoiseSwitches, simulate_beacon_suite};
+use fathom::sensors::simulate_beacon_suite;
 use fathom::sim::experiments::beacons::{EkfSettings, FilterSetup, run_scheme};
 use fathom::sim::montecarlo::run_rng;
 use fathom::stats::ChiSquareBounds;
-use fathom::traj::velocity_command::{VelocityCommandMotion, VelocityCommandParams};
+use fathom::traj::velocity_command::VelocityCommandMotion;
 
 /// Monte Carlo runs.
 const RUNS: usize = 50;
@@ -18,20 +18,7 @@ const CHECKPOINTS: [f64; 6] = [10.0, 20.0, 30.0, 40.0, 50.0, 60.0];
 /// Ensemble-average NEES of the AS scheme over `RUNS` seeded runs at each checkpoint,
 /// with the process-noise sigmas scaled by `scale` (1 = as designed).
 fn anees(scale: f64) -> Vec<f64> {
-    let motion_params = VelocityCommandParams {
-        duration: DURATION,
-        ..VelocityCommandParams::default()
-    };
-    let suite = BeaconSuiteParams {
-        switches: NoiseSwitches {
-            gaussian: true,
-            correlation: false,
-            outliers: false,
-        },
-        ..BeaconSuiteParams::default()
-    }
-    .check()
-    .unwrap();
+    let (motion_params, suite) = crate::support::beacon_mission(DURATION, false, false);
     let settings = EkfSettings {
         process_noise_scale: scale,
         ..EkfSettings::default()

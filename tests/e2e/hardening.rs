@@ -5,10 +5,10 @@
 //! as an error naming the scheme and the time, not a panic or NaN.
 
 use fathom::estimators::schemes::UpdateScheme;
-use fathom::sensors::{BeaconSuiteData, BeaconSuiteParams, NoiseSwitches, simulate_beacon_suite};
+use fathom::sensors::{BeaconSuiteData, simulate_beacon_suite};
 use fathom::sim::experiments::beacons::{EkfSettings, FilterSetup, SchemeRun, run_scheme};
 use fathom::sim::montecarlo::run_rng;
-use fathom::traj::velocity_command::{VelocityCommandMotion, VelocityCommandParams};
+use fathom::traj::velocity_command::VelocityCommandMotion;
 use nalgebra::{Vector3, Vector4};
 
 /// Run length, s.
@@ -25,20 +25,7 @@ struct Fixture {
 }
 
 fn fixture() -> Fixture {
-    let motion_params = VelocityCommandParams {
-        duration: DURATION,
-        ..VelocityCommandParams::default()
-    };
-    let suite = BeaconSuiteParams {
-        switches: NoiseSwitches {
-            gaussian: true,
-            correlation: true,
-            outliers: true,
-        },
-        ..BeaconSuiteParams::default()
-    }
-    .check()
-    .unwrap();
+    let (motion_params, suite) = crate::support::beacon_mission(DURATION, true, true);
     let setup = FilterSetup::new(&EkfSettings::default(), &suite, &motion_params).unwrap();
     let mut rng = run_rng(77, 0);
     let motion =

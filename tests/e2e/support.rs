@@ -143,3 +143,31 @@ pub fn read(dir: &Path, file: &str) -> String {
     std::fs::read_to_string(dir.join(file))
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", dir.join(file).display()))
 }
+
+/// The beacons paper's velocity-command motion of `duration_s` and its sensor suite with
+/// Gaussian noise on and the given correlation / outlier switches (library defaults
+/// otherwise): the common fixture of the beacon EKF end-to-end tests.
+pub fn beacon_mission(
+    duration_s: f64,
+    correlation: bool,
+    outliers: bool,
+) -> (
+    fathom::traj::velocity_command::VelocityCommandParams,
+    fathom::sensors::BeaconSuiteConfig,
+) {
+    let motion_params = fathom::traj::velocity_command::VelocityCommandParams {
+        duration: duration_s,
+        ..Default::default()
+    };
+    let suite = fathom::sensors::BeaconSuiteParams {
+        switches: fathom::sensors::NoiseSwitches {
+            gaussian: true,
+            correlation,
+            outliers,
+        },
+        ..Default::default()
+    }
+    .check()
+    .unwrap();
+    (motion_params, suite)
+}
