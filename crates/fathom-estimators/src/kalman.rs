@@ -6,7 +6,7 @@ use crate::{
     EstimatorError, MeasurementNoise,
     error::check_finite_entries,
     gating::{Gate, GateThreshold},
-    linalg,
+    linalg, simd,
 };
 use fathom_core::{
     Gaussian, Time,
@@ -103,18 +103,39 @@ impl SequentialReport {
 /// unrolled for `N <= 16`. A constant `R` can be checked once with
 /// [`MeasurementNoise`] ([`KalmanFilter::update_with_noise`]). See
 /// `docs/performance.md`.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Clone)]
 pub struct KalmanFilter<const N: usize> {
     x: SVector<f64, N>,
-    p: SMatrix<f64, N, N>,
+    /// Two covariance buffers: `p[active]` is `P`; a step writes the new `P` into
+    /// the other one and flips `active` only when it succeeds, so nothing is copied
+    /// and a failing step leaves `P` as it was.
+    p: [SMatrix<f64, N, N>; 2],
+    active: usize,
     time: Time,
+}
+
+impl<const N: usize> PartialEq for KalmanFilter<N> {
+    /// Equal state, covariance and time (the spare covariance buffer is not compared).
+    fn eq(&self, other: &Self) -> bool {
+        self.x == other.x && self.covariance() == other.covariance() && self.time == other.time
+    }
+}
+
+impl<const N: usize> std::fmt::Debug for KalmanFilter<N> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("KalmanFilter")
+            .field("x", &self.x)
+            .field("p", self.covariance())
+            .field("time", &self.time)
+            .finish()
+    }
 }
 
 /// Everything computed before the gate decision (shared by all update flavours).
 struct Prepared<const N: usize, const M: usize> {
     pht: SMatrix<f64, N, M>,
     s: SMatrix<f64, M, M>,
-    ldl: linalg::Ldl<M>,
+    ldl: linalg::SpdSolver<M>,
     nis: f64,
 }
 
@@ -131,11 +152,26 @@ impl<const N: usize> KalmanFilter<N> {
         check_finite("initial state x0", x.as_slice(), N, 1, time)?;
         check_covariance("initial covariance P0", &p)
             .map_err(|e| EstimatorError::from_core_at(e, time))?;
+        let p = symmetrize(&p);
         Ok(Self {
             x,
-            p: symmetrize(&p),
+            p: [p, p],
+            active: 0,
             time,
         })
+    }
+
+    /// `(P, the spare buffer)`.
+    #[inline(always)]
+    fn covariance_and_spare(&mut self) -> (&SMatrix<f64, N, N>, &mut SMatrix<f64, N, N>) {
+        let [p0, p1] = &mut self.p;
+        if self.active == 0 { (p0, p1) } else { (p1, p0) }
+    }
+
+    /// Makes the spare buffer `P` (after it was written and checked).
+    #[inline(always)]
+    fn flip(&mut self) {
+        self.active ^= 1;
     }
 
     /// The state estimate `x`.
@@ -145,7 +181,7 @@ impl<const N: usize> KalmanFilter<N> {
 
     /// The covariance `P`.
     pub fn covariance(&self) -> &SMatrix<f64, N, N> {
-        &self.p
+        &self.p[self.active]
     }
 
     /// The time stamp (s) of the estimate.
@@ -155,7 +191,7 @@ impl<const N: usize> KalmanFilter<N> {
 
     /// The estimate as a Gaussian (the filter keeps the covariance invariants).
     pub fn estimate(&self) -> Gaussian<N> {
-        Gaussian::new_unchecked(self.x, self.p)
+        Gaussian::new_unchecked(self.x, *self.covariance())
     }
 
     /// Replaces the state `x`, keeping `P` and the time (e.g. the equalized state of
@@ -179,7 +215,7 @@ impl<const N: usize> KalmanFilter<N> {
         check_covariance("covariance P", &p)
             .map_err(|e| EstimatorError::from_core_at(e, self.time))?;
         self.x = x;
-        self.p = symmetrize(&p);
+        self.p[self.active] = symmetrize(&p);
         Ok(())
     }
 
@@ -267,21 +303,23 @@ impl<const N: usize> KalmanFilter<N> {
         new_time: Time,
         input_checks: impl FnOnce() -> Result<(), EstimatorError>,
     ) -> Result<(), EstimatorError> {
-        let (p_pred, q_ok) = linalg::propagate_covariance(f, &self.p, q);
-        if !(q_ok && linalg::all_finite(x_pred.as_slice()) && linalg::is_positive_definite(&p_pred))
-        {
-            return Err(prediction_error(
-                input_checks,
-                &x_pred,
-                q,
-                &p_pred,
-                new_time,
-            ));
-        }
-        self.x = x_pred;
-        self.p = p_pred;
-        self.time = new_time;
-        Ok(())
+        simd::dispatch(
+            #[inline(always)]
+            || {
+                let (p, p_pred) = self.covariance_and_spare();
+                let q_ok = linalg::propagate_covariance(f, p, q, p_pred);
+                if !(q_ok
+                    && linalg::all_finite(x_pred.as_slice())
+                    && linalg::is_positive_definite(p_pred))
+                {
+                    return Err(prediction_error(input_checks, &x_pred, q, p_pred, new_time));
+                }
+                self.x = x_pred;
+                self.flip();
+                self.time = new_time;
+                Ok(())
+            },
+        )
     }
 
     /// Linear update with measurement `z = H x + v`, `v ~ N(0, R)`, at the filter time
@@ -298,9 +336,14 @@ impl<const N: usize> KalmanFilter<N> {
         h: &SMatrix<f64, M, N>,
         r: &SMatrix<f64, M, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        let nu = z - h * self.x;
-        let prep = self.prepare(&nu, h, r, true, || measurement_checks(z, h, self.time))?;
-        self.apply(&nu, prep)
+        simd::dispatch(
+            #[inline(always)]
+            || {
+                let nu = linalg::innovation_of(z, h, &self.x);
+                let prep = self.prepare(&nu, h, r, true, || measurement_checks(z, h, self.time))?;
+                self.apply(&nu, prep)
+            },
+        )
     }
 
     /// Update with a given innovation `nu` (EKF: `nu = z - h(x)`, `H = dh/dx` at `x`);
@@ -314,8 +357,13 @@ impl<const N: usize> KalmanFilter<N> {
         h: &SMatrix<f64, M, N>,
         r: &SMatrix<f64, M, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        let prep = self.prepare(nu, h, r, true, || innovation_checks(nu, h, self.time))?;
-        self.apply(nu, prep)
+        simd::dispatch(
+            #[inline(always)]
+            || {
+                let prep = self.prepare(nu, h, r, true, || innovation_checks(nu, h, self.time))?;
+                self.apply(nu, prep)
+            },
+        )
     }
 
     /// [`KalmanFilter::update`] with a measurement noise checked once at construction
@@ -329,11 +377,16 @@ impl<const N: usize> KalmanFilter<N> {
         h: &SMatrix<f64, M, N>,
         noise: &MeasurementNoise<M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        let nu = z - h * self.x;
-        let prep = self.prepare(&nu, h, noise.matrix(), false, || {
-            measurement_checks(z, h, self.time)
-        })?;
-        self.apply(&nu, prep)
+        simd::dispatch(
+            #[inline(always)]
+            || {
+                let nu = linalg::innovation_of(z, h, &self.x);
+                let prep = self.prepare(&nu, h, noise.matrix(), false, || {
+                    measurement_checks(z, h, self.time)
+                })?;
+                self.apply(&nu, prep)
+            },
+        )
     }
 
     /// Update with a given innovation and a checked noise, optionally gated: the
@@ -349,15 +402,20 @@ impl<const N: usize> KalmanFilter<N> {
         noise: &MeasurementNoise<M>,
         gate: Option<GateThreshold>,
     ) -> Result<Gate<M>, EstimatorError> {
-        let prep = self.prepare(nu, h, noise.matrix(), false, || {
-            innovation_checks(nu, h, self.time)
-        })?;
-        if let Some(g) = gate
-            && !g.accepts(prep.nis)
-        {
-            return Ok(Gate::Rejected { nis: prep.nis });
-        }
-        self.apply(nu, prep).map(Gate::Accepted)
+        simd::dispatch(
+            #[inline(always)]
+            || {
+                let prep = self.prepare(nu, h, noise.matrix(), false, || {
+                    innovation_checks(nu, h, self.time)
+                })?;
+                if let Some(g) = gate
+                    && !g.accepts(prep.nis)
+                {
+                    return Ok(Gate::Rejected { nis: prep.nis });
+                }
+                self.apply(nu, prep).map(Gate::Accepted)
+            },
+        )
     }
 
     /// Gated linear update: computes the NIS first and applies the update only when
@@ -372,9 +430,14 @@ impl<const N: usize> KalmanFilter<N> {
         r: &SMatrix<f64, M, M>,
         gate: GateThreshold,
     ) -> Result<Gate<M>, EstimatorError> {
-        let nu = z - h * self.x;
-        let prep = self.prepare(&nu, h, r, true, || measurement_checks(z, h, self.time))?;
-        self.gated_apply(&nu, prep, gate)
+        simd::dispatch(
+            #[inline(always)]
+            || {
+                let nu = linalg::innovation_of(z, h, &self.x);
+                let prep = self.prepare(&nu, h, r, true, || measurement_checks(z, h, self.time))?;
+                self.gated_apply(&nu, prep, gate)
+            },
+        )
     }
 
     /// Gated update with a given innovation (EKF flavour of [`KalmanFilter::update_gated`]).
@@ -388,10 +451,16 @@ impl<const N: usize> KalmanFilter<N> {
         r: &SMatrix<f64, M, M>,
         gate: GateThreshold,
     ) -> Result<Gate<M>, EstimatorError> {
-        let prep = self.prepare(nu, h, r, true, || innovation_checks(nu, h, self.time))?;
-        self.gated_apply(nu, prep, gate)
+        simd::dispatch(
+            #[inline(always)]
+            || {
+                let prep = self.prepare(nu, h, r, true, || innovation_checks(nu, h, self.time))?;
+                self.gated_apply(nu, prep, gate)
+            },
+        )
     }
 
+    #[inline(always)]
     fn gated_apply<const M: usize>(
         &mut self,
         nu: &SVector<f64, M>,
@@ -423,8 +492,8 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<Prepared<N, M>, EstimatorError> {
         // R's test first (independent of P): it overlaps with the products below
         let r_ok = !check_r || linalg::covariance_surely_valid(r);
-        let (pht, s) = linalg::innovation(&self.p, h, r);
-        let ldl = linalg::Ldl::new(&s);
+        let (pht, s) = linalg::innovation(self.covariance(), h, r);
+        let ldl = linalg::SpdSolver::new(&s);
         let nis = ldl.as_ref().map_or(f64::NAN, |l| l.quad_form(nu));
         if !(r_ok && nis.is_finite()) {
             input_error(input_checks, r, check_r, self.time)?;
@@ -448,12 +517,14 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<UpdateInfo<M>, EstimatorError> {
         let k = prep.ldl.solve_right(&prep.pht);
         let x_new = self.x + linalg::mat_vec(&k, nu);
-        let p_new = linalg::joseph_update(&self.p, &prep.pht, &k, &prep.s);
-        if !(linalg::all_finite(x_new.as_slice()) && linalg::is_positive_definite(&p_new)) {
-            return Err(updated_error(&x_new, &p_new, self.time));
+        let time = self.time;
+        let (p, p_new) = self.covariance_and_spare();
+        linalg::joseph_update(p, &prep.pht, &k, &prep.s, p_new);
+        if !(linalg::all_finite(x_new.as_slice()) && linalg::is_positive_definite(p_new)) {
+            return Err(updated_error(&x_new, p_new, time));
         }
         self.x = x_new;
-        self.p = p_new;
+        self.flip();
         Ok(UpdateInfo {
             innovation: *nu,
             innovation_cov: prep.s,
@@ -516,63 +587,68 @@ impl<const N: usize> KalmanFilter<N> {
     where
         F: FnMut(usize, &SVector<f64, N>) -> ScalarMeasurement<N>,
     {
-        let t = self.time;
-        let mut x = self.x;
-        let mut p = self.p;
-        let mut outcomes = Vec::with_capacity(count);
-        for i in 0..count {
-            let m = measurement(i, &x);
-            if !m.innovation.is_finite() {
-                return Err(EstimatorError::NonFinite {
-                    what: "innovation nu".into(),
-                    index: i,
-                    value: m.innovation,
-                    time: t,
-                });
-            }
-            if let Some(c) = (0..N).find(|&c| !m.h_row[c].is_finite()) {
-                return Err(EstimatorError::NonFinite {
-                    what: format!("measurement row H[{i}]"),
-                    index: c,
-                    value: m.h_row[c],
-                    time: t,
-                });
-            }
-            if !(m.variance.is_finite() && m.variance > 0.0) {
-                return Err(EstimatorError::NotPositiveDefinite {
-                    what: format!("measurement variance r_diag[{i}] = {}", m.variance),
-                    time: t,
-                });
-            }
-            let pht: SVector<f64, N> = p * m.h_row.transpose();
-            let s = (m.h_row * pht)[0] + m.variance;
-            if !(s.is_finite() && s > 0.0) {
-                return Err(EstimatorError::NotPositiveDefinite {
-                    what: format!("innovation variance S[{i}]"),
-                    time: t,
-                });
-            }
-            let nis = m.innovation * m.innovation / s;
-            let accepted = gate.is_none_or(|g| g.accepts(nis));
-            outcomes.push(ScalarOutcome {
-                innovation: m.innovation,
-                innovation_var: s,
-                nis,
-                accepted,
-            });
-            if !accepted {
-                continue;
-            }
-            let k = pht / s;
-            x += k * m.innovation;
-            p = linalg::joseph_update_scalar(&p, &pht, &k, s);
-        }
-        if !(linalg::all_finite(x.as_slice()) && linalg::is_positive_definite(&p)) {
-            return Err(updated_error(&x, &p, t));
-        }
-        self.x = x;
-        self.p = p;
-        Ok(SequentialReport { outcomes })
+        simd::dispatch(
+            #[inline(always)]
+            || {
+                let t = self.time;
+                let mut x = self.x;
+                let mut p = *self.covariance();
+                let mut outcomes = Vec::with_capacity(count);
+                for i in 0..count {
+                    let m = measurement(i, &x);
+                    if !m.innovation.is_finite() {
+                        return Err(EstimatorError::NonFinite {
+                            what: "innovation nu".into(),
+                            index: i,
+                            value: m.innovation,
+                            time: t,
+                        });
+                    }
+                    if let Some(c) = (0..N).find(|&c| !m.h_row[c].is_finite()) {
+                        return Err(EstimatorError::NonFinite {
+                            what: format!("measurement row H[{i}]"),
+                            index: c,
+                            value: m.h_row[c],
+                            time: t,
+                        });
+                    }
+                    if !(m.variance.is_finite() && m.variance > 0.0) {
+                        return Err(EstimatorError::NotPositiveDefinite {
+                            what: format!("measurement variance r_diag[{i}] = {}", m.variance),
+                            time: t,
+                        });
+                    }
+                    let pht: SVector<f64, N> = p * m.h_row.transpose();
+                    let s = (m.h_row * pht)[0] + m.variance;
+                    if !(s.is_finite() && s > 0.0) {
+                        return Err(EstimatorError::NotPositiveDefinite {
+                            what: format!("innovation variance S[{i}]"),
+                            time: t,
+                        });
+                    }
+                    let nis = m.innovation * m.innovation / s;
+                    let accepted = gate.is_none_or(|g| g.accepts(nis));
+                    outcomes.push(ScalarOutcome {
+                        innovation: m.innovation,
+                        innovation_var: s,
+                        nis,
+                        accepted,
+                    });
+                    if !accepted {
+                        continue;
+                    }
+                    let k = pht / s;
+                    x += k * m.innovation;
+                    p = linalg::joseph_update_scalar(&p, &pht, &k, s);
+                }
+                if !(linalg::all_finite(x.as_slice()) && linalg::is_positive_definite(&p)) {
+                    return Err(updated_error(&x, &p, t));
+                }
+                self.x = x;
+                self.p[self.active] = p;
+                Ok(SequentialReport { outcomes })
+            },
+        )
     }
 
     /// Commits an externally computed `(x, P)` after checking it (used by the
@@ -586,7 +662,7 @@ impl<const N: usize> KalmanFilter<N> {
         check_finite("updated state x", x.as_slice(), N, 1, self.time)?;
         check_pd("updated covariance P", &p, self.time)?;
         self.x = x;
-        self.p = p;
+        self.p[self.active] = p;
         Ok(())
     }
 }
@@ -1269,6 +1345,90 @@ mod tests {
         assert_eq!(kf, before);
     }
 
+    /// Every public step of a filter with `N` states and `M` measurements, driven by
+    /// `rng` (random `F`, `Q`, `H`, `R`, `z`), recorded bit by bit: states,
+    /// covariances, NIS and the innovation covariances.
+    fn run_every_step<const N: usize, const M: usize>(seed: u64, tweak: f64) -> Vec<u64> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let prior =
+            Gaussian::new(SVector::<f64, N>::zeros(), random_spd::<N>(&mut rng, 0.5)).unwrap();
+        let mut kf = KalmanFilter::new(prior, 0.0).unwrap();
+        let mut bits = Vec::new();
+        let mut record = |kf: &KalmanFilter<N>, extra: &[f64]| {
+            let all = kf.state().iter().chain(kf.covariance().iter()).chain(extra);
+            bits.extend(all.map(|v| v.to_bits()));
+        };
+        let gate = GateThreshold::from_sigma_distance(3.0).unwrap();
+        for k in 0..40 {
+            let f = SMatrix::<f64, N, N>::identity()
+                + SMatrix::<f64, N, N>::from_fn(|_, _| rng.random_range(-0.1..0.1));
+            let q = random_spd::<N>(&mut rng, 0.01) * 0.01;
+            let h = SMatrix::<f64, M, N>::from_fn(|_, _| rng.random_range(-1.0..1.0));
+            let r = random_spd::<M>(&mut rng, 0.1);
+            let z = SVector::<f64, M>::from_fn(|_, _| rng.random_range(-2.0..2.0) + tweak);
+            kf.predict(&f, &q, f64::from(k) + 1.0).unwrap();
+            record(&kf, &[]);
+            let info = match k % 4 {
+                0 => kf.update(&z, &h, &r).unwrap(),
+                1 => kf
+                    .update_with_noise(&z, &h, &MeasurementNoise::new(r).unwrap())
+                    .unwrap(),
+                2 => match kf.update_gated(&z, &h, &r, gate).unwrap() {
+                    Gate::Accepted(info) => info,
+                    Gate::Rejected { nis } => UpdateInfo {
+                        innovation: z,
+                        innovation_cov: r,
+                        nis,
+                    },
+                },
+                _ => {
+                    let rows: Vec<_> = (0..M).map(|i| h.row(i).into_owned()).collect();
+                    let r_diag: Vec<_> = (0..M).map(|i| r[(i, i)]).collect();
+                    let rep = kf
+                        .update_sequential_scalar(z.as_slice(), &rows, &r_diag, Some(gate))
+                        .unwrap();
+                    let nis = rep.outcomes.iter().map(|o| o.nis).sum();
+                    UpdateInfo {
+                        innovation: z,
+                        innovation_cov: r,
+                        nis,
+                    }
+                }
+            };
+            record(&kf, &[info.nis]);
+            record(&kf, info.innovation_cov.as_slice());
+        }
+        bits
+    }
+
+    #[test]
+    fn simd_dispatch_is_bit_identical_to_the_baseline_build() {
+        // On an AVX2 machine (the project's), `dispatch` really takes the AVX2 path,
+        // so the comparison below is between two different compilations.
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") && std::env::var_os("FATHOM_SIMD").is_none()
+        {
+            assert_eq!(simd::kernel_instruction_set(), "avx2");
+        }
+        for seed in 0..4 {
+            let wide = run_every_step::<6, 3>(seed, 0.0);
+            let base = simd::tests::with_baseline(|| run_every_step::<6, 3>(seed, 0.0));
+            assert!(wide == base, "6/3 seed {seed}: AVX2 and baseline differ");
+            let wide = run_every_step::<9, 3>(seed, 0.0);
+            let base = simd::tests::with_baseline(|| run_every_step::<9, 3>(seed, 0.0));
+            assert!(wide == base, "9/3 seed {seed}: AVX2 and baseline differ");
+            let wide = run_every_step::<4, 2>(seed, 0.0);
+            let base = simd::tests::with_baseline(|| run_every_step::<4, 2>(seed, 0.0));
+            assert!(wide == base, "4/2 seed {seed}: AVX2 and baseline differ");
+            let wide = run_every_step::<15, 1>(seed, 0.0);
+            let base = simd::tests::with_baseline(|| run_every_step::<15, 1>(seed, 0.0));
+            assert!(wide == base, "15/1 seed {seed}: AVX2 and baseline differ");
+        }
+        // negative control: the comparison sees a change of one ulp in the measurements
+        let tweaked = run_every_step::<6, 3>(0, f64::EPSILON);
+        assert!(tweaked != run_every_step::<6, 3>(0, 0.0));
+    }
+
     #[test]
     fn sequential_with_closure_relinearizes_at_the_current_state() {
         // range-like scalar h(x) = |x| measured twice: the second innovation must use
@@ -1323,7 +1483,7 @@ mod tests {
         check_covariance("measurement noise R", r)
             .map_err(|e| EstimatorError::from_core_at(e, t))?;
         let s = h * kf.covariance() * h.transpose() + r;
-        if linalg::Ldl::new(&symmetrize(&s)).is_none() {
+        if linalg::SpdSolver::new(&symmetrize(&s)).is_none() {
             return Err(EstimatorError::NotPositiveDefinite {
                 what: "innovation covariance S".into(),
                 time: t,

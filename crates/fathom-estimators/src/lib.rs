@@ -97,6 +97,7 @@ pub mod measurement_noise;
 pub mod models;
 pub mod robust;
 pub mod schemes;
+pub mod simd;
 pub mod stacked;
 pub mod velocity_filter;
 pub mod wheel_odometry;

@@ -115,6 +115,22 @@ pub(crate) fn mat_vec<const R: usize, const C: usize>(
     matrix([y])
 }
 
+/// Innovation `z - H x`, each row accumulated over the columns of `H` in order (the
+/// order nalgebra's product uses).
+#[inline(always)]
+pub(crate) fn innovation_of<const M: usize, const N: usize>(
+    z: &SVector<f64, M>,
+    h: &SMatrix<f64, M, N>,
+    x: &SVector<f64, N>,
+) -> SVector<f64, M> {
+    let hx = cols(&mat_vec(h, x))[0];
+    let mut nu = cols(z)[0];
+    for i in 0..M {
+        nu[i] -= hx[i];
+    }
+    matrix([nu])
+}
+
 /// Whether every entry is finite: a branch-free reduction (`v * 0` is `+-0` for a
 /// finite `v` and NaN for an infinite or NaN one, and a NaN survives every sum),
 /// with four independent partial sums.
@@ -149,7 +165,8 @@ pub(crate) fn propagate_covariance<const N: usize>(
     f: &SMatrix<f64, N, N>,
     p: &SMatrix<f64, N, N>,
     q: &SMatrix<f64, N, N>,
-) -> (SMatrix<f64, N, N>, bool) {
+    p_pred: &mut SMatrix<f64, N, N>,
+) -> bool {
     let (fc, qc) = (cols(f), cols(q));
     let a = mul(fc, cols(p));
     let mut scale = f64::MIN_POSITIVE;
@@ -160,7 +177,7 @@ pub(crate) fn propagate_covariance<const N: usize>(
         scale = if d > scale { d } else { scale };
     }
     let threshold = SYMMETRY_TOLERANCE * scale;
-    let mut out = [[0.0; N]; N];
+    let mut upper = [[0.0; N]; N];
     unrolled_for!(j in 0..N, {
         // rows 0..=j of column j of A F^T: sum_k A[:, k] F[j, k] (F[j, k] = fc[k][j])
         let mut col = [0.0; N];
@@ -176,12 +193,28 @@ pub(crate) fn propagate_covariance<const N: usize>(
         for i in 0..j + 1 {
             let (upper, lower) = (qc[j][i], qc[i][j]);
             q_ok &= (upper - lower).abs() <= threshold;
-            let v = col[i] + 0.5 * (upper + lower);
-            out[j][i] = v;
-            out[i][j] = v;
+            col[i] += 0.5 * (upper + lower);
         }
+        upper[j] = col;
     });
-    (matrix(out), q_ok)
+    store_symmetric(&upper, &mut p_pred.data.0);
+    q_ok
+}
+
+/// Writes the symmetric matrix whose upper triangle is that of `upper` (column `j`,
+/// rows `0..=j`) into `out`, one whole column at a time: the mirrored entries are
+/// gathered by loads, not scattered by stores, so the next kernel's column loads
+/// are served by single stores (a load that spans several smaller stores cannot
+/// take its data from the store buffer and waits for them to retire).
+#[inline(always)]
+fn store_symmetric<const N: usize>(upper: &Cols<N, N>, out: &mut Cols<N, N>) {
+    unrolled_for!(j in 0..N, {
+        let mut col = upper[j];
+        for i in (j + 1)..N {
+            col[i] = upper[i][j];
+        }
+        out[j] = col;
+    });
 }
 
 /// `U = P H^T` (`N x M`) and the innovation covariance `S = H U + (R + R^T) / 2`
@@ -217,49 +250,134 @@ pub(crate) fn innovation<const N: usize, const M: usize>(
     (matrix(u), matrix(s))
 }
 
-/// `S = L D L^T` of a symmetric positive-definite `M x M` matrix (unit lower `L`,
-/// pivots `D > 0`), used for the gain `K = U S^-1` and the NIS `nu^T S^-1 nu`
-/// without forming `S^-1`.
+/// Solver for the innovation covariance `S` (symmetric positive definite, `M x M`),
+/// used for the gain `K = U S^-1` and the NIS `nu^T S^-1 nu`:
+///
+/// - `M <= 3`: `S^-1 = adj(S) / det S` in closed form. Positive definiteness by
+///   Sylvester's criterion (leading minors `s_00`, `s_00 s_11 - s_01^2`, `det S`
+///   all `> 0` and finite). The minors and cofactors are products of entries of
+///   `S`, so the one division waits for them only, not for a chain of pivots (the
+///   three pivots of `L D L^T` are three divisions in a row on the critical path
+///   of a Kalman step, ~50 cycles). A non-finite entry makes `det S` non-finite
+///   (every entry is a factor of a term of the determinant), which fails the test.
+///   The gain's rounding error is first order in `cond(S)` as for any solver, and
+///   the Joseph-form update is insensitive to it to first order.
+/// - `M > 3`: `S = L D L^T` (unit lower `L`, pivots `D > 0`, right-looking, one
+///   division per pivot), gain by triangular solves, no explicit inverse.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Ldl<const M: usize> {
-    /// Column-major unit lower factor, `l[c][r] = L[r, c]` for `r > c`.
+pub(crate) struct SpdSolver<const M: usize> {
+    /// `M <= 3`: `S^-1`, column-major. Unused otherwise.
+    inv: Cols<M, M>,
+    /// `M > 3`: column-major unit lower factor, `l[c][r] = L[r, c]` for `r > c`.
     l: Cols<M, M>,
-    /// `1 / D`.
+    /// `M > 3`: `1 / D`.
     d_inv: [f64; M],
 }
 
-impl<const M: usize> Ldl<M> {
-    /// Factors `s` (lower triangle read; right-looking, one division per pivot);
-    /// `None` unless every pivot is finite and `> 0`, i.e. `s` is positive definite.
+/// Whether `v` is `> 0` and finite (NaN fails every comparison).
+#[inline(always)]
+fn positive_finite(v: f64) -> bool {
+    v > 0.0 && v <= f64::MAX
+}
+
+impl<const M: usize> SpdSolver<M> {
+    /// Prepares the solves with `s` (lower triangle read); `None` unless `s` is
+    /// positive definite (criteria above).
     #[inline(always)]
     pub(crate) fn new(s: &SMatrix<f64, M, M>) -> Option<Self> {
-        let mut w = *cols(s);
-        let mut d_inv = [0.0; M];
-        unrolled_for!(j in 0..M, {
-            let d = w[j][j];
-            if !(d > 0.0 && d <= f64::MAX) {
-                return None;
+        let sc = cols(s);
+        let mut out = Self {
+            inv: [[0.0; M]; M],
+            l: [[0.0; M]; M],
+            d_inv: [0.0; M],
+        };
+        // lower triangle: lo(i, j) = S[i, j], i >= j
+        let lo = |i: usize, j: usize| sc[j][i];
+        match M {
+            0 => {}
+            1 => {
+                let a = lo(0, 0);
+                if !positive_finite(a) {
+                    return None;
+                }
+                out.inv[0][0] = 1.0 / a;
             }
-            let inv = 1.0 / d;
-            d_inv[j] = inv;
-            // trailing lower triangle: a[r, c] -= a[r, j] a[c, j] / d, c > j, r >= c
-            for c in (j + 1)..M {
-                let f = w[j][c] * inv;
-                for r in c..M {
-                    w[c][r] -= w[j][r] * f;
+            2 => {
+                let (a, b, d) = (lo(0, 0), lo(1, 0), lo(1, 1));
+                let det = a * d - b * b;
+                if !(positive_finite(a) && positive_finite(det)) {
+                    return None;
+                }
+                let r = 1.0 / det;
+                out.inv[0][0] = d * r;
+                out.inv[1][1] = a * r;
+                out.inv[0][1] = -b * r;
+                out.inv[1][0] = -b * r;
+            }
+            3 => {
+                let (a, b, c) = (lo(0, 0), lo(1, 0), lo(2, 0));
+                let (d, e, f) = (lo(1, 1), lo(2, 1), lo(2, 2));
+                // cofactors (S symmetric: the adjugate is symmetric too)
+                let c00 = d * f - e * e;
+                let c01 = c * e - b * f;
+                let c02 = b * e - c * d;
+                let c11 = a * f - c * c;
+                let c12 = b * c - a * e;
+                let c22 = a * d - b * b;
+                let det = a * c00 + b * c01 + c * c02;
+                if !(positive_finite(a) && positive_finite(c22) && positive_finite(det)) {
+                    return None;
+                }
+                let r = 1.0 / det;
+                let adj = [[c00, c01, c02], [c01, c11, c12], [c02, c12, c22]];
+                for j in 0..3 {
+                    for i in 0..3 {
+                        out.inv[j][i] = adj[j][i] * r;
+                    }
                 }
             }
-            for r in (j + 1)..M {
-                w[j][r] *= inv;
+            _ => {
+                let mut w = *sc;
+                unrolled_for!(j in 0..M, {
+                    let d = w[j][j];
+                    if !positive_finite(d) {
+                        return None;
+                    }
+                    let inv = 1.0 / d;
+                    out.d_inv[j] = inv;
+                    // trailing lower triangle: a[r, c] -= a[r, j] a[c, j] / d, c > j, r >= c
+                    for c in (j + 1)..M {
+                        let f = w[j][c] * inv;
+                        for r in c..M {
+                            w[c][r] -= w[j][r] * f;
+                        }
+                    }
+                    for r in (j + 1)..M {
+                        w[j][r] *= inv;
+                    }
+                });
+                out.l = w;
             }
-        });
-        Some(Self { l: w, d_inv })
+        }
+        Some(out)
     }
 
-    /// `nu^T S^-1 nu = |D^-1/2 L^-1 nu|^2` (forward substitution).
+    /// `nu^T S^-1 nu` (`M > 3`: `|D^-1/2 L^-1 nu|^2` by forward substitution).
     #[inline(always)]
     pub(crate) fn quad_form(&self, nu: &SVector<f64, M>) -> f64 {
-        let mut y = cols(nu)[0];
+        let nu = cols(nu)[0];
+        if M <= 3 {
+            let mut nis = 0.0;
+            for j in 0..M {
+                let mut row = 0.0;
+                for i in 0..M {
+                    row += self.inv[j][i] * nu[i];
+                }
+                nis += nu[j] * row;
+            }
+            return nis;
+        }
+        let mut y = nu;
         let mut nis = 0.0;
         for j in 0..M {
             let yj = y[j];
@@ -271,11 +389,14 @@ impl<const M: usize> Ldl<M> {
         nis
     }
 
-    /// `K = U S^-1` (`N x M`), i.e. the solution of `K S = U`: `Y = U L^-T` (columns
-    /// in increasing order), `Z = Y D^-1`, `K = Z L^-1` (columns in decreasing
-    /// order); `2 N M (M - 1) / 2 + N M` multiply-adds.
+    /// `K = U S^-1` (`N x M`), i.e. the solution of `K S = U`. `M <= 3`: the product
+    /// with `S^-1`. `M > 3`: `Y = U L^-T` (columns in increasing order), `Z = Y D^-1`,
+    /// `K = Z L^-1` (columns in decreasing order). Both `N M^2` multiply-adds.
     #[inline(always)]
     pub(crate) fn solve_right<const N: usize>(&self, u: &SMatrix<f64, N, M>) -> SMatrix<f64, N, M> {
+        if M <= 3 {
+            return matrix(mul(cols(u), &self.inv));
+        }
         let mut k = *cols(u);
         // Y L^T = U: Y[:, j] = U[:, j] - sum_{i < j} L[j, i] Y[:, i]
         for j in 0..M {
@@ -318,7 +439,8 @@ pub(crate) fn joseph_update<const N: usize, const M: usize>(
     pht: &SMatrix<f64, N, M>,
     k: &SMatrix<f64, N, M>,
     s: &SMatrix<f64, M, M>,
-) -> SMatrix<f64, N, N> {
+    p_new: &mut SMatrix<f64, N, N>,
+) {
     let (pc, uc, kc, sc) = (cols(p), cols(pht), cols(k), cols(s));
     // W = U - K S
     let mut w = *uc;
@@ -329,7 +451,7 @@ pub(crate) fn joseph_update<const N: usize, const M: usize>(
     }
     // rows 0..=j of column j of P - K U^T - W K^T:
     // P[:, j] - sum_m (K[:, m] U[j, m] + W[:, m] K[j, m])
-    let mut out = [[0.0; N]; N];
+    let mut upper = [[0.0; N]; N];
     unrolled_for!(j in 0..N, {
         let mut col = [0.0; N];
         col[..j + 1].copy_from_slice(&pc[j][..j + 1]);
@@ -339,12 +461,9 @@ pub(crate) fn joseph_update<const N: usize, const M: usize>(
                 col[i] -= kc[m][i] * ujm + w[m][i] * kjm;
             }
         }
-        for i in 0..j + 1 {
-            out[j][i] = col[i];
-            out[i][j] = col[i];
-        }
+        upper[j] = col;
     });
-    matrix(out)
+    store_symmetric(&upper, &mut p_new.data.0);
 }
 
 /// Scalar Joseph update (`M = 1`: row `h`, innovation variance `s`, `pht = P h^T`,
@@ -390,11 +509,17 @@ pub(crate) fn joseph_update_scalar<const N: usize>(
 /// non-finite matrix fails.
 #[inline(always)]
 pub(crate) fn is_positive_definite<const N: usize>(a: &SMatrix<f64, N, N>) -> bool {
-    let mut w = *cols(a);
+    let a = cols(a);
+    // The Schur complements; entry (c, r) is written before it is read, so `a` is
+    // never copied (a copy of the whole matrix was a `memcpy` call): the first pivot
+    // block and the first trailing update read `a` itself (`j` is a literal in each
+    // unrolled copy, so the choice is made at compile time).
+    let mut w = [[0.0; N]; N];
     unrolled_for!(j in 0..N, {
         if j.is_multiple_of(2) {
+            let at = |w: &Cols<N, N>, c: usize, r: usize| if j == 0 { a[c][r] } else { w[c][r] };
             if j + 1 < N {
-                let (p, q, t) = (w[j][j], w[j][j + 1], w[j + 1][j + 1]);
+                let (p, q, t) = (at(&w, j, j), at(&w, j, j + 1), at(&w, j + 1, j + 1));
                 let det = p * t - q * q;
                 // p > 0 and det > 0, both finite (NaN fails every comparison)
                 if !(p > 0.0 && det > 0.0 && p <= f64::MAX && det <= f64::MAX) {
@@ -402,14 +527,15 @@ pub(crate) fn is_positive_definite<const N: usize>(a: &SMatrix<f64, N, N>) -> bo
                 }
                 let inv = 1.0 / det;
                 for c in (j + 2)..N {
-                    let (b0, b1) = (w[j][c], w[j + 1][c]);
+                    let (b0, b1) = (at(&w, j, c), at(&w, j + 1, c));
                     let (y0, y1) = (b0 * t - b1 * q, b1 * p - b0 * q);
                     for r in c..N {
-                        w[c][r] -= (w[j][r] * y0 + w[j + 1][r] * y1) * inv;
+                        let v = at(&w, c, r) - (at(&w, j, r) * y0 + at(&w, j + 1, r) * y1) * inv;
+                        w[c][r] = v;
                     }
                 }
             } else {
-                let d = w[j][j];
+                let d = at(&w, j, j);
                 if !(d > 0.0 && d <= f64::MAX) {
                     return false;
                 }
@@ -528,6 +654,30 @@ mod tests {
         SMatrix::from_fn(|_, _| rng.random_range(-1.0..1.0))
     }
 
+    /// [`propagate_covariance`] returning the matrix.
+    fn propagated<const N: usize>(
+        f: &SMatrix<f64, N, N>,
+        p: &SMatrix<f64, N, N>,
+        q: &SMatrix<f64, N, N>,
+    ) -> (SMatrix<f64, N, N>, bool) {
+        // a non-zero start: every entry must be overwritten
+        let mut out = SMatrix::repeat(f64::NAN);
+        let ok = propagate_covariance(f, p, q, &mut out);
+        (out, ok)
+    }
+
+    /// [`joseph_update`] returning the matrix.
+    fn joseph<const N: usize, const M: usize>(
+        p: &SMatrix<f64, N, N>,
+        pht: &SMatrix<f64, N, M>,
+        k: &SMatrix<f64, N, M>,
+        s: &SMatrix<f64, M, M>,
+    ) -> SMatrix<f64, N, N> {
+        let mut out = SMatrix::repeat(f64::NAN);
+        joseph_update(p, pht, k, s, &mut out);
+        out
+    }
+
     fn spd<const K: usize>(rng: &mut ChaCha8Rng) -> SMatrix<f64, K, K> {
         let a = random::<K, K>(rng);
         a * a.transpose() + SMatrix::<f64, K, K>::identity() * 0.1
@@ -543,7 +693,7 @@ mod tests {
                 spd::<7>(&mut rng),
             );
             let full = f * p * f.transpose() + q;
-            let (fast, q_ok) = propagate_covariance(&f, &p, &q);
+            let (fast, q_ok) = propagated(&f, &p, &q);
             assert!(q_ok);
             assert_eq!(fast, fast.transpose());
             assert_relative_eq!(fast, (full + full.transpose()) * 0.5, epsilon = 1e-12);
@@ -553,7 +703,7 @@ mod tests {
     #[test]
     fn process_noise_predicate() {
         let (f, p) = (Matrix2::identity(), Matrix2::identity());
-        let ok = |q: Matrix2<f64>| propagate_covariance(&f, &p, &q).1;
+        let ok = |q: Matrix2<f64>| propagated(&f, &p, &q).1;
         assert!(ok(Matrix2::zeros()));
         assert!(ok(Matrix2::new(1.0, 0.5, 0.5, 2.0)));
         assert!(ok(Matrix2::new(1.0, 0.5, 0.5 + 1e-10, 2.0))); // within tolerance
@@ -592,7 +742,7 @@ mod tests {
             let a = SMatrix::<f64, 6, 6>::identity() - k * h;
             let product = a * p * a.transpose() + k * r * k.transpose();
             let s = h * pht + r;
-            let fast = joseph_update(&p, &pht, &k, &s);
+            let fast = joseph(&p, &pht, &k, &s);
             assert_eq!(fast, fast.transpose());
             assert_relative_eq!(fast, product, epsilon = 1e-11);
             // scalar flavour
@@ -609,12 +759,12 @@ mod tests {
     }
 
     #[test]
-    fn ldl_solves_match_the_inverse() {
+    fn spd_solver_matches_the_inverse() {
         let mut rng = ChaCha8Rng::seed_from_u64(1);
         for _ in 0..20 {
             let s = spd::<3>(&mut rng);
             let inv = s.try_inverse().unwrap();
-            let ldl = Ldl::new(&s).unwrap();
+            let ldl = SpdSolver::new(&s).unwrap();
             // S^-1 itself as the solution of K S = I
             assert_relative_eq!(
                 ldl.solve_right(&Matrix3::identity()),
@@ -631,9 +781,9 @@ mod tests {
                 max_relative = 1e-12
             );
         }
-        assert!(Ldl::new(&Matrix2::new(1.0, 2.0, 2.0, 1.0)).is_none());
-        assert!(Ldl::new(&Matrix2::new(1.0, 0.0, 0.0, f64::NAN)).is_none());
-        assert!(Ldl::new(&Matrix2::new(1.0, f64::INFINITY, f64::INFINITY, 1.0)).is_none());
+        assert!(SpdSolver::new(&Matrix2::new(1.0, 2.0, 2.0, 1.0)).is_none());
+        assert!(SpdSolver::new(&Matrix2::new(1.0, 0.0, 0.0, f64::NAN)).is_none());
+        assert!(SpdSolver::new(&Matrix2::new(1.0, f64::INFINITY, f64::INFINITY, 1.0)).is_none());
     }
 
     #[test]
