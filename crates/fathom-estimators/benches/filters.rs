@@ -15,7 +15,7 @@ use std::hint::black_box;
 use criterion::{BatchSize, Criterion, criterion_group};
 use fathom_core::Gaussian;
 use fathom_estimators::{
-    GateThreshold, KalmanFilter, MeasurementNoise,
+    GateThreshold, KalmanFilter, MeasurementNoise, ProcessNoise,
     beacon_ekf::{BeaconMeasurement, DvlAhrsInput, DvlAhrsMotion, DvlAhrsMotionParams},
     ekf::{Ekf, GroupItem},
     error_state::{ErrorCovariance, ErrorStateFilter},
@@ -63,6 +63,24 @@ impl<const N: usize, const M: usize> Problem<N, M> {
             .unwrap();
         black_box(
             kf.update_with_noise(black_box(&self.z), black_box(&self.h), black_box(noise))
+                .unwrap(),
+        );
+    }
+
+    /// [`Problem::step`] with `Q` and `R` checked once ([`ProcessNoise`],
+    /// [`MeasurementNoise`]): the step of a filter with constant noise.
+    #[inline(always)]
+    fn step_checked_noise(
+        &self,
+        kf: &mut KalmanFilter<N>,
+        t: &mut f64,
+        (q, r): (&ProcessNoise<N>, &MeasurementNoise<M>),
+    ) {
+        *t += DT;
+        kf.predict_with_noise(black_box(&self.f), black_box(q), *t)
+            .unwrap();
+        black_box(
+            kf.update_with_noise(black_box(&self.z), black_box(&self.h), black_box(r))
                 .unwrap(),
         );
     }
@@ -170,6 +188,11 @@ fn kf_6_3(c: &mut Criterion) {
     c.bench_function("kf_6x3_predict_update_checked_r", |b| {
         b.iter(|| pb.step_checked_r(&mut kf, &mut t, &noise))
     });
+    let q_checked = ProcessNoise::new(pb.q).unwrap();
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    c.bench_function("kf_6x3_predict_update_checked_noise", |b| {
+        b.iter(|| pb.step_checked_noise(&mut kf, &mut t, (&q_checked, &noise)))
+    });
     let rows: Vec<RowSVector<f64, 6>> = (0..3).map(|i| pb.h.row(i).into_owned()).collect();
     let (mut kf, mut t) = (pb.filter(), 0.0);
     c.bench_function("kf_6x3_predict_update_sequential_diag_r", |b| {
@@ -199,6 +222,18 @@ fn callgrind_kf_6x3_checked_r(pb: &Problem<6, 3>, n: usize) {
     let noise = MeasurementNoise::new(pb.r).unwrap();
     for _ in 0..n {
         pb.step_checked_r(&mut kf, &mut t, &noise);
+    }
+}
+
+#[inline(never)]
+fn callgrind_kf_6x3_checked_noise(pb: &Problem<6, 3>, n: usize) {
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    let noise = (
+        ProcessNoise::new(pb.q).unwrap(),
+        MeasurementNoise::new(pb.r).unwrap(),
+    );
+    for _ in 0..n {
+        pb.step_checked_noise(&mut kf, &mut t, (&noise.0, &noise.1));
     }
 }
 
@@ -436,6 +471,13 @@ fn min_batch_times() {
             pb.step_checked_r(&mut kf, &mut t, &noise);
         }
     });
+    let q_checked = ProcessNoise::new(pb.q).unwrap();
+    let (mut kf, mut t) = (pb.filter(), 0.0);
+    report("kf_6x3_predict_update_checked_noise", || {
+        for _ in 0..500 {
+            pb.step_checked_noise(&mut kf, &mut t, (&q_checked, &noise));
+        }
+    });
     let pb = ca_9_3();
     let (mut kf, mut t) = (pb.filter(), 0.0);
     report("kf_9x3_predict_update", || {
@@ -453,6 +495,7 @@ fn main() {
         // Fixed work for instruction counting (see the module docs); no criterion.
         callgrind_kf_6x3(&cv_6_3(), n);
         callgrind_kf_6x3_checked_r(&cv_6_3(), n);
+        callgrind_kf_6x3_checked_noise(&cv_6_3(), n);
         callgrind_kf_6x3_sequential(&cv_6_3(), n);
         callgrind_reference_6x3(&cv_6_3(), n);
         callgrind_kf_9x3(&ca_9_3(), n);

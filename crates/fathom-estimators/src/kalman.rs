@@ -3,7 +3,7 @@
 //! fixed-size path (errors aside).
 
 use crate::{
-    EstimatorError, MeasurementNoise,
+    EstimatorError, MeasurementNoise, ProcessNoise,
     error::check_finite_entries,
     gating::{Gate, GateThreshold},
     linalg, simd,
@@ -100,9 +100,10 @@ impl SequentialReport {
 /// Cost: both covariance steps form one triangle and mirror it; the Joseph update is
 /// `O(N^2 M)` instead of `O(N^3)`; the positive-definiteness tests are a `2 x 2`-block
 /// `L D L^T` (`N^3 / 6`, one division per two columns); the triangular kernels are
-/// unrolled for `N <= 16`. A constant `R` can be checked once with
-/// [`MeasurementNoise`] ([`KalmanFilter::update_with_noise`]). See
-/// `docs/performance.md`.
+/// unrolled for `N <= 16`; the kernels run with AVX2 when the CPU has it
+/// ([`crate::simd`], bit-identical results). A constant `R` or `Q` can be checked once
+/// with [`MeasurementNoise`] ([`KalmanFilter::update_with_noise`]) or [`ProcessNoise`]
+/// ([`KalmanFilter::predict_with_noise`]). See `docs/performance.md`.
 #[derive(Clone)]
 pub struct KalmanFilter<const N: usize> {
     x: SVector<f64, N>,
@@ -237,7 +238,25 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
         let x_pred = linalg::mat_vec(f, &self.x);
-        self.predict_core(x_pred, f, q, new_time, || {
+        self.predict_core(x_pred, f, q, true, new_time, || {
+            check_finite("transition matrix F", f.as_slice(), N, N, new_time)
+        })
+    }
+
+    /// [`KalmanFilter::predict`] with a process noise checked once
+    /// ([`ProcessNoise`]): the same numbers, without re-checking `Q` every step.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::predict`], except that `Q` is not re-checked.
+    pub fn predict_with_noise(
+        &mut self,
+        f: &SMatrix<f64, N, N>,
+        noise: &ProcessNoise<N>,
+        new_time: Time,
+    ) -> Result<(), EstimatorError> {
+        check_time("predict", new_time, self.time)?;
+        let x_pred = linalg::mat_vec(f, &self.x);
+        self.predict_core(x_pred, f, noise.matrix(), false, new_time, || {
             check_finite("transition matrix F", f.as_slice(), N, N, new_time)
         })
     }
@@ -257,7 +276,7 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
         let x_pred = f * self.x + b * u;
-        self.predict_core(x_pred, f, q, new_time, || {
+        self.predict_core(x_pred, f, q, true, new_time, || {
             check_finite("transition matrix F", f.as_slice(), N, N, new_time)?;
             check_finite("control matrix B", b.as_slice(), N, U, new_time)?;
             check_finite("control input u", u.as_slice(), U, 1, new_time)
@@ -277,7 +296,7 @@ impl<const N: usize> KalmanFilter<N> {
         new_time: Time,
     ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
-        self.predict_core(*x_pred, f_jacobian, q, new_time, || {
+        self.predict_core(*x_pred, f_jacobian, q, true, new_time, || {
             check_finite(
                 "transition Jacobian F",
                 f_jacobian.as_slice(),
@@ -300,6 +319,7 @@ impl<const N: usize> KalmanFilter<N> {
         x_pred: SVector<f64, N>,
         f: &SMatrix<f64, N, N>,
         q: &SMatrix<f64, N, N>,
+        check_q: bool,
         new_time: Time,
         input_checks: impl FnOnce() -> Result<(), EstimatorError>,
     ) -> Result<(), EstimatorError> {
@@ -307,7 +327,7 @@ impl<const N: usize> KalmanFilter<N> {
             #[inline(always)]
             || {
                 let (p, p_pred) = self.covariance_and_spare();
-                let q_ok = linalg::propagate_covariance(f, p, q, p_pred);
+                let q_ok = linalg::propagate_covariance(f, p, q, check_q, p_pred);
                 if !(q_ok
                     && linalg::all_finite(x_pred.as_slice())
                     && linalg::is_positive_definite(p_pred))
@@ -792,7 +812,7 @@ fn check_finite(
 }
 
 /// `Q`: finite, symmetric (relative tolerance as `fathom_core`), non-negative diagonal.
-fn check_process_noise<const N: usize>(
+pub(crate) fn check_process_noise<const N: usize>(
     q: &SMatrix<f64, N, N>,
     time: Time,
 ) -> Result<(), EstimatorError> {
@@ -1366,7 +1386,13 @@ mod tests {
             let h = SMatrix::<f64, M, N>::from_fn(|_, _| rng.random_range(-1.0..1.0));
             let r = random_spd::<M>(&mut rng, 0.1);
             let z = SVector::<f64, M>::from_fn(|_, _| rng.random_range(-2.0..2.0) + tweak);
-            kf.predict(&f, &q, f64::from(k) + 1.0).unwrap();
+            if k % 3 == 0 {
+                let noise = ProcessNoise::new(q).unwrap();
+                kf.predict_with_noise(&f, &noise, f64::from(k) + 1.0)
+                    .unwrap();
+            } else {
+                kf.predict(&f, &q, f64::from(k) + 1.0).unwrap();
+            }
             record(&kf, &[]);
             let info = match k % 4 {
                 0 => kf.update(&z, &h, &r).unwrap(),
@@ -1399,6 +1425,68 @@ mod tests {
             record(&kf, info.innovation_cov.as_slice());
         }
         bits
+    }
+
+    #[test]
+    fn checked_process_noise_gives_the_same_bits_and_errors_as_the_raw_q() {
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        let prior =
+            Gaussian::new(SVector::<f64, 6>::zeros(), random_spd::<6>(&mut rng, 0.5)).unwrap();
+        let (mut raw, mut checked) = (
+            KalmanFilter::new(prior.clone(), 0.0).unwrap(),
+            KalmanFilter::new(prior, 0.0).unwrap(),
+        );
+        for k in 1..30 {
+            let f = SMatrix::<f64, 6, 6>::identity()
+                + SMatrix::<f64, 6, 6>::from_fn(|_, _| rng.random_range(-0.1..0.1));
+            let mut q = random_spd::<6>(&mut rng, 0.01) * 0.01;
+            // symmetric within the tolerance, not exactly: the stored (Q + Q^T) / 2
+            // must give what predict's own symmetrization gives
+            q[(0, 3)] *= 1.0 + 1e-12;
+            let t = f64::from(k);
+            raw.predict(&f, &q, t).unwrap();
+            checked
+                .predict_with_noise(&f, &ProcessNoise::new(q).unwrap(), t)
+                .unwrap();
+            let bits = |kf: &KalmanFilter<6>| {
+                let all = kf.state().iter().chain(kf.covariance().iter());
+                all.map(|v| v.to_bits()).collect::<Vec<_>>()
+            };
+            assert_eq!(bits(&raw), bits(&checked), "step {k}");
+        }
+        // failures: the same error, the filter unchanged
+        let noise = ProcessNoise::new(SMatrix::<f64, 6, 6>::zeros()).unwrap();
+        let t = raw.time() + 1.0;
+        let singular = SMatrix::<f64, 6, 6>::zeros();
+        let mut bad_f = SMatrix::<f64, 6, 6>::identity();
+        bad_f[(2, 4)] = f64::NAN;
+        for f in [singular, bad_f] {
+            let before = checked.clone();
+            let e_raw = raw.clone().predict(&f, noise.matrix(), t).unwrap_err();
+            let e_checked = checked.predict_with_noise(&f, &noise, t).unwrap_err();
+            assert_eq!(format!("{e_raw:?}"), format!("{e_checked:?}"));
+            assert_eq!(checked, before);
+        }
+        assert!(matches!(
+            checked.predict_with_noise(&SMatrix::identity(), &noise, t - 5.0),
+            Err(EstimatorError::TimeBackwards { .. })
+        ));
+        // what ProcessNoise refuses, predict refuses with the same error
+        let mut asym = SMatrix::<f64, 6, 6>::identity();
+        asym[(1, 2)] = 0.5;
+        let mut neg = SMatrix::<f64, 6, 6>::identity();
+        neg[(3, 3)] = -1e-9;
+        let mut nan = SMatrix::<f64, 6, 6>::identity();
+        nan[(5, 0)] = f64::NAN;
+        for q in [asym, neg, nan] {
+            let e_new = ProcessNoise::new(q).unwrap_err();
+            let e_predict = raw
+                .clone()
+                .predict(&SMatrix::identity(), &q, 0.0 + raw.time())
+                .unwrap_err();
+            let time_free = |e: EstimatorError| format!("{:?}", e.at_time(0.0));
+            assert_eq!(time_free(e_new), time_free(e_predict));
+        }
     }
 
     #[test]

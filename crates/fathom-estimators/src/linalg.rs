@@ -149,10 +149,12 @@ pub(crate) fn all_finite(data: &[f64]) -> bool {
     (acc[0] + acc[1]) + (acc[2] + acc[3]) == 0.0
 }
 
-/// Predicted covariance `F P F^T + (Q + Q^T) / 2` and whether `Q` passes the
-/// process-noise test of [`crate::kalman`] (non-negative diagonal, symmetric within
-/// [`SYMMETRY_TOLERANCE`] relative to the largest diagonal entry; finiteness is not
-/// tested here).
+/// Predicted covariance `F P F^T + (Q + Q^T) / 2`, written to `p_pred`, and whether
+/// `Q` passes the process-noise test of [`crate::kalman`] (non-negative diagonal,
+/// symmetric within [`SYMMETRY_TOLERANCE`] relative to the largest diagonal entry;
+/// finiteness is not tested here). With `check_q = false` (a [`crate::ProcessNoise`],
+/// checked and exactly symmetric) the test is skipped and the upper triangle of `Q`
+/// is added as it is, which is the same number: `0.5 (u + u) = u`.
 ///
 /// `A = F P`, then only the upper triangle of `A F^T` (column `j`, rows `0..=j`:
 /// `sum_k A[:, k] F[j, k]`), mirrored: the result is exactly symmetric. A non-finite
@@ -165,16 +167,19 @@ pub(crate) fn propagate_covariance<const N: usize>(
     f: &SMatrix<f64, N, N>,
     p: &SMatrix<f64, N, N>,
     q: &SMatrix<f64, N, N>,
+    check_q: bool,
     p_pred: &mut SMatrix<f64, N, N>,
 ) -> bool {
     let (fc, qc) = (cols(f), cols(q));
     let a = mul(fc, cols(p));
     let mut scale = f64::MIN_POSITIVE;
     let mut q_ok = true;
-    for j in 0..N {
-        let d = qc[j][j];
-        q_ok &= d >= 0.0;
-        scale = if d > scale { d } else { scale };
+    if check_q {
+        for j in 0..N {
+            let d = qc[j][j];
+            q_ok &= d >= 0.0;
+            scale = if d > scale { d } else { scale };
+        }
     }
     let threshold = SYMMETRY_TOLERANCE * scale;
     let mut upper = [[0.0; N]; N];
@@ -191,9 +196,14 @@ pub(crate) fn propagate_covariance<const N: usize>(
             }
         }
         for i in 0..j + 1 {
-            let (upper, lower) = (qc[j][i], qc[i][j]);
-            q_ok &= (upper - lower).abs() <= threshold;
-            col[i] += 0.5 * (upper + lower);
+            if check_q {
+                let (upper, lower) = (qc[j][i], qc[i][j]);
+                q_ok &= (upper - lower).abs() <= threshold;
+                col[i] += 0.5 * (upper + lower);
+            } else {
+                // a checked `Q` is exactly symmetric: 0.5 (u + u) == u
+                col[i] += qc[j][i];
+            }
         }
         upper[j] = col;
     });
@@ -662,7 +672,7 @@ mod tests {
     ) -> (SMatrix<f64, N, N>, bool) {
         // a non-zero start: every entry must be overwritten
         let mut out = SMatrix::repeat(f64::NAN);
-        let ok = propagate_covariance(f, p, q, &mut out);
+        let ok = propagate_covariance(f, p, q, true, &mut out);
         (out, ok)
     }
 
