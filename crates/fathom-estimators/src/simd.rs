@@ -1,6 +1,6 @@
 //! Run-time choice of the vector instruction set for the fixed-size Kalman kernels.
 //!
-//! The crate is built for the default `x86-64` target (SSE2). [`dispatch`] runs a
+//! The crate is built for the default `x86-64` target (SSE2). `dispatch` runs a
 //! closure compiled a second time with AVX2 enabled (through `pulp`, which `faer`
 //! already uses) when the CPU has it, so the `#[inline(always)]` kernels of
 //! `linalg` inlined into the closure use 4-wide vectors (measured: the 6-state /
