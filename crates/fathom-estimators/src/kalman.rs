@@ -1498,19 +1498,21 @@ mod tests {
         {
             assert_eq!(simd::kernel_instruction_set(), "avx2");
         }
+        fn same_bits<const N: usize, const M: usize>(seed: u64) -> bool {
+            let wide = run_every_step::<N, M>(seed, 0.0);
+            wide == simd::tests::with_baseline(|| run_every_step::<N, M>(seed, 0.0))
+        }
+        type Check = fn(u64) -> bool;
+        let shapes: [(&str, Check); 4] = [
+            ("6/3", same_bits::<6, 3>),
+            ("9/3", same_bits::<9, 3>),
+            ("4/2", same_bits::<4, 2>),
+            ("15/1", same_bits::<15, 1>),
+        ];
         for seed in 0..4 {
-            let wide = run_every_step::<6, 3>(seed, 0.0);
-            let base = simd::tests::with_baseline(|| run_every_step::<6, 3>(seed, 0.0));
-            assert!(wide == base, "6/3 seed {seed}: AVX2 and baseline differ");
-            let wide = run_every_step::<9, 3>(seed, 0.0);
-            let base = simd::tests::with_baseline(|| run_every_step::<9, 3>(seed, 0.0));
-            assert!(wide == base, "9/3 seed {seed}: AVX2 and baseline differ");
-            let wide = run_every_step::<4, 2>(seed, 0.0);
-            let base = simd::tests::with_baseline(|| run_every_step::<4, 2>(seed, 0.0));
-            assert!(wide == base, "4/2 seed {seed}: AVX2 and baseline differ");
-            let wide = run_every_step::<15, 1>(seed, 0.0);
-            let base = simd::tests::with_baseline(|| run_every_step::<15, 1>(seed, 0.0));
-            assert!(wide == base, "15/1 seed {seed}: AVX2 and baseline differ");
+            for (shape, same) in shapes {
+                assert!(same(seed), "{shape} seed {seed}: AVX2 and baseline differ");
+            }
         }
         // negative control: the comparison sees a change of one ulp in the measurements
         let tweaked = run_every_step::<6, 3>(0, f64::EPSILON);
