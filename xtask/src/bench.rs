@@ -179,6 +179,21 @@ fn targets(results: &[BenchResult]) -> String {
             }
         ));
     }
+    if let (Some(kf), Some(reference)) = (
+        find(results, "kf_6x3_predict_update"),
+        find(results, "nalgebra_reference_6x3_predict_update"),
+    ) {
+        // the machine's speed varies from minute to minute on a shared VM; the
+        // check-free nalgebra step measured in the same run shows how fast it was
+        s.push_str(&format!(
+            "  KF 6/3 vs check-free nalgebra step in this run: {:.2}x by the median \
+             ({} vs {}; fastest samples {:.2}x)\n",
+            kf.ns_per_iter / reference.ns_per_iter,
+            fmt_ns(kf.ns_per_iter),
+            fmt_ns(reference.ns_per_iter),
+            kf.min_ns_per_iter / reference.min_ns_per_iter,
+        ));
+    }
     s
 }
 
@@ -361,13 +376,26 @@ mod tests {
         // results older than the run are ignored
         let later = SystemTime::now() + std::time::Duration::from_secs(3600);
         assert!(collect(&criterion_dir(&dir), later).unwrap().is_empty());
-        let t = targets(&[BenchResult {
+        let kf = BenchResult {
             name: "kf_6x3_predict_update".into(),
             ns_per_iter: 150.0,
             min_ns_per_iter: 140.0,
             iters: 1,
-        }]);
-        assert!(t.contains("met"), "{t}");
+        };
+        let t = targets(std::slice::from_ref(&kf));
+        assert!(t.contains("met") && !t.contains("NOT met"), "{t}");
+        assert!(!t.contains("nalgebra"), "{t}");
+        let reference = BenchResult {
+            name: "nalgebra_reference_6x3_predict_update".into(),
+            ns_per_iter: 300.0,
+            min_ns_per_iter: 200.0,
+            iters: 1,
+        };
+        let t = targets(&[kf, reference]);
+        assert!(
+            t.contains("0.50x by the median (150.0 ns vs 300.0 ns; fastest samples 0.70x)"),
+            "{t}"
+        );
         assert!(table(&r).contains("grp/f"));
         std::fs::remove_dir_all(&dir).unwrap();
     }
