@@ -84,8 +84,8 @@ impl SequentialReport {
 ///
 /// Equations (Bar-Shalom et al., Joseph form):
 /// - predict: `x = F x (+ B u)`, `P = F P F^T + (Q + Q^T) / 2` (exactly symmetric);
-/// - update: `S = H P H^T + R`, `S = L D L^T`, `K = P H^T S^-1` (triangular solves),
-///   `nis = nu^T S^-1 nu`, `x = x + K nu`, `P = (I - K H) P (I - K H)^T + K R K^T`
+/// - update: `S = H P H^T + R`, `K = P H^T S^-1` (`S^-1 = adj(S) / det S` for up to 3
+///   measurements, else `S = L D L^T` and triangular solves), `nis = nu^T S^-1 nu`, `x = x + K nu`, `P = (I - K H) P (I - K H)^T + K R K^T`
 ///   (expanded Joseph form, exactly symmetric; see `linalg::joseph_update`).
 ///
 /// Checks: a step computes first and then makes ONE validity test of all it needs
@@ -136,7 +136,7 @@ impl<const N: usize> std::fmt::Debug for KalmanFilter<N> {
 struct Prepared<const N: usize, const M: usize> {
     pht: SMatrix<f64, N, M>,
     s: SMatrix<f64, M, M>,
-    ldl: linalg::SpdSolver<M>,
+    solver: linalg::SpdSolver<M>,
     nis: f64,
 }
 
@@ -493,7 +493,8 @@ impl<const N: usize> KalmanFilter<N> {
         self.apply(nu, prep).map(Gate::Accepted)
     }
 
-    /// Forms `U = P H^T` and `S = H P H^T + R`, factors `S` (`L D L^T`) and computes
+    /// Forms `U = P H^T` and `S = H P H^T + R`, prepares the solves with `S`
+    /// ([`linalg::SpdSolver`]) and computes
     /// the NIS, then ONE validity test: `R` valid (when `check_r`; a
     /// [`MeasurementNoise`] is checked already), `S` positive definite and the NIS
     /// finite. A non-finite `H` or `R` makes `S` fail its factorization, a non-finite
@@ -513,18 +514,23 @@ impl<const N: usize> KalmanFilter<N> {
         // R's test first (independent of P): it overlaps with the products below
         let r_ok = !check_r || linalg::covariance_surely_valid(r);
         let (pht, s) = linalg::innovation(self.covariance(), h, r);
-        let ldl = linalg::SpdSolver::new(&s);
-        let nis = ldl.as_ref().map_or(f64::NAN, |l| l.quad_form(nu));
+        let solver = linalg::SpdSolver::new(&s);
+        let nis = solver.as_ref().map_or(f64::NAN, |l| l.quad_form(nu));
         if !(r_ok && nis.is_finite()) {
             input_error(input_checks, r, check_r, self.time)?;
         }
-        let Some(ldl) = ldl else {
+        let Some(solver) = solver else {
             return Err(EstimatorError::NotPositiveDefinite {
                 what: "innovation covariance S".into(),
                 time: self.time,
             });
         };
-        Ok(Prepared { pht, s, ldl, nis })
+        Ok(Prepared {
+            pht,
+            s,
+            solver,
+            nis,
+        })
     }
 
     /// Gain `K = U S^-1` by triangular solves with the factor of `S`, state, Joseph
@@ -535,7 +541,7 @@ impl<const N: usize> KalmanFilter<N> {
         nu: &SVector<f64, M>,
         prep: Prepared<N, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        let k = prep.ldl.solve_right(&prep.pht);
+        let k = prep.solver.solve_right(&prep.pht);
         let x_new = self.x + linalg::mat_vec(&k, nu);
         let time = self.time;
         let (p, p_new) = self.covariance_and_spare();

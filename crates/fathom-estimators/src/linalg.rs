@@ -1,13 +1,14 @@
 //! Fixed-size kernels of the Kalman core (no allocation): the symmetric covariance
 //! prediction `F P F^T + Q`, the innovation covariance `S = H P H^T + R` with its
-//! `L D L^T` factor (gain by triangular solves, NIS), the Joseph-form update computed
-//! for one triangle, the positive-definiteness test, and validity predicates for `Q`
-//! and `R` (the exact error is searched for only when a predicate fails, see
-//! [`crate::kalman`]).
+//! solver (closed-form `S^-1` for `M <= 3`, else `L D L^T`: gain and NIS), the
+//! Joseph-form update computed for one triangle, the positive-definiteness test, and
+//! validity predicates for `Q` and `R` (the exact error is searched for only when a
+//! predicate fails, see [`crate::kalman`]). Results that the next step reads are
+//! written into the caller's buffer one whole column at a time.
 //!
 //! Costs (multiply-adds, `N` states, `M` measurements): prediction `N^3 + N^2 (N + 1)
 //! / 2` (`F P`, then the upper triangle of `(F P) F^T`); innovation `N^2 M + N M^2`;
-//! gain `N M^2` (two triangular solves with the factor of `S`, no explicit inverse);
+//! gain `N M^2` (product with `S^-1`, or two triangular solves for `M > 3`);
 //! Joseph update `N M^2 + N (N + 1) M`; positive-definiteness test `N^3 / 6` and `N /
 //! 2` divisions. Matrices are read through their column arrays (`[[f64;
 //! rows]; cols]`, nalgebra's storage); loops over whole columns have compile-time
@@ -232,7 +233,7 @@ fn store_symmetric<const N: usize>(upper: &Cols<N, N>, out: &mut Cols<N, N>) {
 ///
 /// A non-finite `H[m, c]` makes `U[c, m]` (term `P[c, c] H[m, c]`) and then
 /// `S[m, m]` (term `H[m, c] U[c, m]`) non-finite; a non-finite `R` entry makes its
-/// `S` entry non-finite: the factorization of `S` ([`Ldl::new`]) then fails.
+/// `S` entry non-finite: [`SpdSolver::new`] then fails.
 #[inline(always)]
 pub(crate) fn innovation<const N: usize, const M: usize>(
     p: &SMatrix<f64, N, N>,
