@@ -10,9 +10,9 @@
 //! message), which the regression test compares with the `.expected` file stored
 //! beside each regression input.
 
-use fathom_sim::data::matv5::{NamedMatrix, mat_v5_bytes};
+use fathom_sim::data::matv5::mat_v5_bytes;
 use fathom_sim::data::plaza::{
-    BeaconSite, PlazaMat, PoseRecord, RangeOrder, parse_mat, parse_odometry, parse_ranges,
+    BeaconSite, PlazaMat, RangeOrder, parse_mat, parse_odometry, parse_ranges,
 };
 use fathom_sim::experiments::registry;
 use fathom_sim::user_run::{check_scenario_text, one_line};
@@ -306,13 +306,6 @@ pub fn plaza_text(data: &[u8]) -> Vec<String> {
     out
 }
 
-fn pose_rows(poses: &[PoseRecord]) -> Vec<Vec<f64>> {
-    poses
-        .iter()
-        .map(|p| vec![p.time, p.x, p.y, p.heading])
-        .collect()
-}
-
 /// Target `plaza_mat`: the bytes as a Plaza `.mat` file ([`parse_mat`]). An accepted
 /// file must hold finite values, strictly increasing times and unique beacon ids, and
 /// must survive a round trip through the MAT v5 writer ([`mat_v5_bytes`]).
@@ -332,18 +325,8 @@ pub fn plaza_mat(data: &[u8]) -> Vec<String> {
                 assert!(b.x.is_finite() && b.y.is_finite());
                 assert!(mat.beacons[..i].iter().all(|o| o.id != b.id));
             }
-            let bytes = mat_v5_bytes(&[
-                NamedMatrix::new("GT", pose_rows(&mat.ground_truth)),
-                NamedMatrix::new(
-                    "TL",
-                    mat.beacons
-                        .iter()
-                        .map(|b| vec![b.id as f64, b.x, b.y])
-                        .collect(),
-                ),
-                NamedMatrix::new("DRp", pose_rows(&mat.dr_path)),
-            ])
-            .expect("an accepted file can be written back");
+            let bytes =
+                mat_v5_bytes(&mat.to_matrices()).expect("an accepted file can be written back");
             let again: PlazaMat =
                 parse_mat(&bytes, "again_.mat").expect("the written file reads back");
             assert_eq!(again, mat, "MAT v5 round trip changed the data");

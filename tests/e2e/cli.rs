@@ -7,6 +7,8 @@ use std::path::{Path, PathBuf};
 use fathom_sim::experiments::registry;
 use fathom_sim::user_run::{EXIT_USAGE, check_command};
 
+use crate::support::compare_snapshot;
+
 fn corpus() -> Vec<PathBuf> {
     let dir = Path::new("tests/cli_corpus");
     let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
@@ -33,14 +35,7 @@ fn broken_scenarios_give_one_line_errors_and_exit_code_2() {
             line.contains("key `") || line.contains("missing field"),
             "{line}"
         );
-        let expected = std::fs::read_to_string(f.with_extension("expected")).unwrap();
-        if line != expected.trim_end() {
-            mismatches.push(format!(
-                "{}:\n  got      {line}\n  expected {}",
-                f.display(),
-                expected.trim_end()
-            ));
-        }
+        compare_snapshot(f, &f.with_extension("expected"), &line, &mut mismatches);
     }
     assert!(mismatches.is_empty(), "{}", mismatches.join("\n"));
 }

@@ -9,6 +9,8 @@
 
 use std::path::{Path, PathBuf};
 
+use crate::support::compare_snapshot;
+
 #[allow(dead_code)]
 #[path = "../../fuzz/src/lib.rs"]
 mod harness;
@@ -66,15 +68,7 @@ fn every_fuzz_regression_gives_its_expected_error() {
             if std::env::var_os("FATHOM_FUZZ_BLESS").is_some() && !snapshot.exists() {
                 std::fs::write(&snapshot, format!("{got}\n")).unwrap();
             }
-            let expected = std::fs::read_to_string(&snapshot)
-                .unwrap_or_else(|_| panic!("{} has no .expected snapshot", f.display()));
-            if got != expected.trim_end() {
-                mismatches.push(format!(
-                    "{}:\n  got      {got}\n  expected {}",
-                    f.display(),
-                    expected.trim_end()
-                ));
-            }
+            compare_snapshot(&f, &snapshot, &got, &mut mismatches);
         }
     }
     assert!(mismatches.is_empty(), "{}", mismatches.join("\n"));

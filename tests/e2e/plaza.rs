@@ -253,26 +253,7 @@ fn renumbered_beacons_and_shifted_clock_give_identical_errors() {
     let files = PlazaFiles::find(&shifted).unwrap();
     let mut mat = read_mat(&files.mat).unwrap();
     mat.beacons[0].x += 1.0;
-    let rows = |p: &[fathom::sim::data::plaza::PoseRecord]| -> Vec<Vec<f64>> {
-        p.iter()
-            .map(|r| vec![r.time, r.x, r.y, r.heading])
-            .collect()
-    };
-    write_mat_v5(
-        &files.mat,
-        &[
-            NamedMatrix::new("GT", rows(&mat.ground_truth)),
-            NamedMatrix::new(
-                "TL",
-                mat.beacons
-                    .iter()
-                    .map(|b| vec![b.id as f64, b.x, b.y])
-                    .collect(),
-            ),
-            NamedMatrix::new("DRp", rows(&mat.dr_path)),
-        ],
-    )
-    .unwrap();
+    write_mat_v5(&files.mat, &mat.to_matrices()).unwrap();
     let c = replay_dir(&shifted);
     let sc_a = a.method("SC").unwrap().stats.mean;
     let sc_c = c.method("SC").unwrap().stats.mean;

@@ -139,6 +139,20 @@ pub fn fathom(dir: &Path, args: &[&str]) -> Ran {
 }
 
 /// Reads `dir/file` as text.
+/// Compares `got` with the snapshot file `snapshot` (its trailing newline ignored);
+/// a difference is described in `mismatches`, labelled with `input`.
+pub fn compare_snapshot(input: &Path, snapshot: &Path, got: &str, mismatches: &mut Vec<String>) {
+    let expected = std::fs::read_to_string(snapshot)
+        .unwrap_or_else(|_| panic!("{} has no snapshot {}", input.display(), snapshot.display()));
+    if got != expected.trim_end() {
+        mismatches.push(format!(
+            "{}:\n  got      {got}\n  expected {}",
+            input.display(),
+            expected.trim_end()
+        ));
+    }
+}
+
 pub fn read(dir: &Path, file: &str) -> String {
     std::fs::read_to_string(dir.join(file))
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", dir.join(file).display()))

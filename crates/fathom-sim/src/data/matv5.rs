@@ -21,11 +21,19 @@ use std::path::Path;
 
 use crate::SimError;
 
+// MAT v5 data types (`mi*`) and the array class the writer uses (`mx*`).
 const MI_INT8: u32 = 1;
+const MI_UINT8: u32 = 2;
+const MI_INT16: u32 = 3;
+const MI_UINT16: u32 = 4;
 const MI_INT32: u32 = 5;
 const MI_UINT32: u32 = 6;
+const MI_SINGLE: u32 = 7;
 const MI_DOUBLE: u32 = 9;
+const MI_INT64: u32 = 12;
+const MI_UINT64: u32 = 13;
 const MI_MATRIX: u32 = 14;
+const MI_COMPRESSED: u32 = 15;
 const MX_DOUBLE_CLASS: u32 = 6;
 
 /// A named real matrix stored row by row (`rows.len()` rows of equal length).
@@ -139,14 +147,6 @@ pub fn write_mat_v5(path: impl AsRef<Path>, matrices: &[NamedMatrix]) -> Result<
 /// (64 MiB; a Plaza data set inflates to about 1.3 MB). Bounds the memory a small
 /// malicious file can make the reader use.
 pub const MAX_INFLATED_BYTES: usize = 64 << 20;
-
-const MI_INT16: u32 = 3;
-const MI_UINT8: u32 = 2;
-const MI_UINT16: u32 = 4;
-const MI_SINGLE: u32 = 7;
-const MI_INT64: u32 = 12;
-const MI_UINT64: u32 = 13;
-const MI_COMPRESSED: u32 = 15;
 
 /// Everything that can be wrong with a MAT v5 file. `element` is the byte offset of
 /// the top-level data element in the file; `at` the offset inside that element's data

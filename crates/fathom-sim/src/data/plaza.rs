@@ -617,6 +617,31 @@ pub struct PlazaMat {
     pub dr_path: Vec<PoseRecord>,
 }
 
+impl PlazaMat {
+    /// The matrices as [`parse_mat`] reads them (`GT` and `DRp`: `time, x, y, heading`
+    /// rows; `TL`: `id, x, y` rows), for writing a data set back with
+    /// [`crate::data::matv5::write_mat_v5`] (edited copies in tests, round trips).
+    pub fn to_matrices(&self) -> Vec<crate::data::matv5::NamedMatrix> {
+        use crate::data::matv5::NamedMatrix;
+        let poses = |p: &[PoseRecord]| -> Vec<Vec<f64>> {
+            p.iter()
+                .map(|r| vec![r.time, r.x, r.y, r.heading])
+                .collect()
+        };
+        vec![
+            NamedMatrix::new("GT", poses(&self.ground_truth)),
+            NamedMatrix::new(
+                "TL",
+                self.beacons
+                    .iter()
+                    .map(|b| vec![b.id as f64, b.x, b.y])
+                    .collect(),
+            ),
+            NamedMatrix::new("DRp", poses(&self.dr_path)),
+        ]
+    }
+}
+
 /// A matrix of the `.mat` file as rows.
 fn mat_rows(
     path: &Path,
@@ -925,6 +950,15 @@ mod tests {
             e.contains("matrix `TL` row 2: beacon id 3 listed twice"),
             "{e}"
         );
+    }
+
+    #[test]
+    fn to_matrices_is_what_parse_mat_reads() {
+        let bytes = crate::data::matv5::mat_v5_bytes(&mat_matrices()).unwrap();
+        let mat = parse_mat(&bytes, "S_.mat").unwrap();
+        assert_eq!(mat.to_matrices(), mat_matrices());
+        let again = crate::data::matv5::mat_v5_bytes(&mat.to_matrices()).unwrap();
+        assert_eq!(parse_mat(&again, "S_.mat").unwrap(), mat);
     }
 
     #[test]
