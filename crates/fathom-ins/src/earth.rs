@@ -63,6 +63,28 @@ pub(crate) fn transverse_radius_from_sin(s: f64) -> f64 {
     A / (1.0 - E2 * s * s).sqrt()
 }
 
+/// `(R_N, R_E, gamma)` from `sin L` and `h`: [`meridian_radius_from_sin`],
+/// [`transverse_radius_from_sin`] and [`normal_gravity_from_sin`] with their common
+/// `sqrt(1 - e^2 sin^2 L)` taken once (the strapdown's mid-interval terms need all
+/// three at the same latitude).
+pub(crate) fn radii_and_gravity_from_sin(s: f64, h: f64) -> (f64, f64, f64) {
+    let s2 = s * s;
+    let d = 1.0 - E2 * s2;
+    let w = d.sqrt();
+    let gamma_0 = GAMMA_EQUATOR * (1.0 + SOMIGLIANA_K * s2) / w;
+    (
+        A * (1.0 - E2) / (d * w),
+        A / w,
+        gamma_0 * free_air_factor(s2, h),
+    )
+}
+
+/// The free-air factor `1 - (2/a)(1 + f + m - 2 f sin^2 L) h + (3/a^2) h^2` of
+/// [`normal_gravity`].
+fn free_air_factor(s2: f64, h: f64) -> f64 {
+    1.0 - 2.0 / A * (1.0 + F + M_GEODETIC - 2.0 * F * s2) * h + 3.0 / (A * A) * h * h
+}
+
 /// Normal gravity on the ellipsoid surface, Somigliana's closed formula:
 ///
 /// ```text
@@ -91,7 +113,7 @@ pub fn normal_gravity(lat: f64, h: f64) -> f64 {
 pub(crate) fn normal_gravity_from_sin(s: f64, h: f64) -> f64 {
     let s2 = s.powi(2);
     let gamma_0 = GAMMA_EQUATOR * (1.0 + SOMIGLIANA_K * s2) / (1.0 - E2 * s2).sqrt();
-    gamma_0 * (1.0 - 2.0 / A * (1.0 + F + M_GEODETIC - 2.0 * F * s2) * h + 3.0 / (A * A) * h * h)
+    gamma_0 * free_air_factor(s2, h)
 }
 
 /// Derivative of [`normal_gravity`] with respect to height, `d gamma / d h`, 1/s^2

@@ -81,6 +81,10 @@ pub(crate) struct MidTerms {
     pub(crate) zeta: Vector3<f64>,
     /// `(g^n - (2 omega_ie^n + omega_en^n) x v^n)_mid dt`, m/s.
     pub(crate) dv_grav_cor: Vector3<f64>,
+    /// `(sin, cos)` of the latitude at the start of the interval (the one `sin_cos`
+    /// call of a step: the mid-interval values and those of the position update are
+    /// offsets of it, [`sin_cos_offset`]).
+    pub(crate) sin_cos_lat: (f64, f64),
 }
 
 /// Step 1 of the algorithm: extrapolated mid-interval quantities.
@@ -102,17 +106,20 @@ pub(crate) fn mid_terms(
         }
         None => (lat, h, *vel),
     };
-    // One sin/cos of the mid latitude for every Earth-model term (the same formulas
-    // as earth::{earth_rate_in_nav, transport_rate_in_nav, gravity_in_nav}).
-    let (s, c) = lat_m.sin_cos();
+    // One sin/cos of the latitude per step; the mid latitude's is an offset of it,
+    // used by every Earth-model term (the same formulas as
+    // earth::{earth_rate_in_nav, transport_rate_in_nav, gravity_in_nav}).
+    let sin_cos_lat = lat.sin_cos();
+    let (s, c) = sin_cos_offset(sin_cos_lat, lat, lat_m - lat);
     let w_ie = Vector3::new(OMEGA_IE * c, 0.0, -OMEGA_IE * s);
-    let re = earth::transverse_radius_from_sin(s) + h_m;
-    let rn = earth::meridian_radius_from_sin(s) + h_m;
+    let (rn, re, gamma) = earth::radii_and_gravity_from_sin(s, h_m);
+    let (rn, re) = (rn + h_m, re + h_m);
     let w_en = Vector3::new(vel_m.y / re, -vel_m.x / rn, -vel_m.y * (s / c) / re);
-    let g = Vector3::new(0.0, 0.0, earth::normal_gravity_from_sin(s, h_m));
+    let g = Vector3::new(0.0, 0.0, gamma);
     MidTerms {
         zeta: (w_ie + w_en) * dt,
         dv_grav_cor: (g - (w_ie * 2.0 + w_en).cross(&vel_m)) * dt,
+        sin_cos_lat,
     }
 }
 
@@ -146,9 +153,11 @@ pub(crate) fn sculling(
     (dtheta_prev.cross(dv) + dv_prev.cross(dtheta)) / 12.0
 }
 
-/// Step 4: trapezoidal position update; returns `(lat, lon, h)` at `t_k`.
+/// Step 4: trapezoidal position update; returns `(lat, lon, h)` at `t_k`. `sc` is
+/// `(sin, cos)` of `lat`.
 pub(crate) fn position_update(
     lat: f64,
+    sc: (f64, f64),
     lon: f64,
     h: f64,
     vel_prev: &Vector3<f64>,
@@ -158,8 +167,7 @@ pub(crate) fn position_update(
     let dr = (vel_prev + vel) * (0.5 * dt);
     let h_new = h - dr.z;
     let h_m = 0.5 * (h + h_new);
-    // One sin/cos of `lat`; the mid-point latitudes are offsets of it.
-    let sc = lat.sin_cos();
+    // The mid-point latitudes' sin/cos are offsets of `lat`'s.
     let lat_pred = lat + dr.x / (earth::meridian_radius_from_sin(sc.0) + h_m);
     let (s_p, _) = sin_cos_offset(sc, lat, 0.5 * (lat_pred - lat));
     let lat_new = lat + dr.x / (earth::meridian_radius_from_sin(s_p) + h_m);
@@ -292,8 +300,15 @@ impl Strapdown {
         let mut vel_new = s.vel_in_nav + dv_sf_nav + mid.dv_grav_cor;
 
         // Position.
-        let (lat_new, lon_new, mut h_new) =
-            position_update(s.lat, s.lon, s.h, &s.vel_in_nav, &vel_new, dt);
+        let (lat_new, lon_new, mut h_new) = position_update(
+            s.lat,
+            mid.sin_cos_lat,
+            s.lon,
+            s.h,
+            &s.vel_in_nav,
+            &vel_new,
+            dt,
+        );
         if let VerticalChannel::Hold { h } = self.vertical {
             h_new = h;
             vel_new.z = 0.0;
