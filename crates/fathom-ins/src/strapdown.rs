@@ -167,9 +167,9 @@ pub(crate) fn sculling(
 /// ```
 ///
 /// (`dR_N/dL = 3 kappa R_N`, `dR_E/dL = kappa R_E`), whose relative error `O(e^2
-/// delta^2)` is below `1e-14` for `|delta| < 1e-6` rad (a half step of 6 m; at
-/// 100 Hz that is 1200 m/s): the latitude and longitude steps are then exact to far
-/// below double rounding of `L` and `lambda`. Larger steps take the exact radii
+/// delta^2)` (about `0.01 delta^2`) is at most ~`1e-14` for `|delta| < 1e-6` rad (a
+/// half step of 6 m; at 100 Hz that is 1200 m/s): the latitude and longitude steps
+/// are then exact to far below double rounding of `L` and `lambda`. Larger steps take the exact radii
 /// ([`position_update_exact`]).
 pub(crate) fn position_update(
     lat: f64,
