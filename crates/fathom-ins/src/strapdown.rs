@@ -169,8 +169,8 @@ pub(crate) fn sculling(
 /// (`dR_N/dL = 3 kappa R_N`, `dR_E/dL = kappa R_E`), whose relative error `O(e^2
 /// delta^2)` (about `0.01 delta^2`) is at most ~`1e-14` for `|delta| < 1e-6` rad (a
 /// half step of 6 m; at 100 Hz that is 1200 m/s): the latitude and longitude steps
-/// are then exact to far below double rounding of `L` and `lambda`. Larger steps take the exact radii
-/// ([`position_update_exact`]).
+/// are then exact to far below double rounding of `L` and `lambda`. Larger steps
+/// take the exact radii at the mid-point latitudes.
 pub(crate) fn position_update(
     lat: f64,
     sc: (f64, f64),
@@ -180,7 +180,20 @@ pub(crate) fn position_update(
     vel: &Vector3<f64>,
     dt: f64,
 ) -> (f64, f64, f64) {
-    const MAX_LINEAR_OFFSET: f64 = 1e-6;
+    position_update_with(lat, sc, lon, h, (vel_prev, vel), dt, 1e-6)
+}
+
+/// [`position_update`] with the radii linearized below the half-step offset
+/// `max_linear_offset` (rad) and exact above it (`0` = always exact).
+fn position_update_with(
+    lat: f64,
+    sc: (f64, f64),
+    lon: f64,
+    h: f64,
+    (vel_prev, vel): (&Vector3<f64>, &Vector3<f64>),
+    dt: f64,
+    max_linear_offset: f64,
+) -> (f64, f64, f64) {
     let dr = (vel_prev + vel) * (0.5 * dt);
     let h_new = h - dr.z;
     let h_m = 0.5 * (h + h_new);
@@ -189,40 +202,23 @@ pub(crate) fn position_update(
     let w = d.sqrt();
     let (rn, re) = (earth::A * (1.0 - earth::E2) / (d * w), earth::A / w);
     let kappa = earth::E2 * s * c / d;
+    // half the latitude step, predicted with R_N(L)
     let delta_pred = 0.5 * dr.x / (rn + h_m);
     // (false for a NaN offset too: the exact path then carries the NaN to the checks)
-    let small_step = delta_pred.abs() < MAX_LINEAR_OFFSET;
-    if !small_step {
-        return position_update_exact(lat, sc, lon, h, vel_prev, vel, dt);
-    }
-    let lat_new = lat + dr.x / (rn * (1.0 + 3.0 * kappa * delta_pred) + h_m);
-    let delta = 0.5 * (lat_new - lat);
-    let (_, c_m) = sin_cos_offset(sc, lat, delta);
-    let lon_new = lon + dr.y / ((re * (1.0 + kappa * delta) + h_m) * c_m);
-    (lat_new, lon_new, h_new)
-}
-
-/// [`position_update`] with the radii evaluated exactly at the mid-point latitudes
-/// (one square root each): the mid-point latitude of the `L` update is predicted
-/// once with `R_N(L)`.
-pub(crate) fn position_update_exact(
-    lat: f64,
-    sc: (f64, f64),
-    lon: f64,
-    h: f64,
-    vel_prev: &Vector3<f64>,
-    vel: &Vector3<f64>,
-    dt: f64,
-) -> (f64, f64, f64) {
-    let dr = (vel_prev + vel) * (0.5 * dt);
-    let h_new = h - dr.z;
-    let h_m = 0.5 * (h + h_new);
-    // The mid-point latitudes' sin/cos are offsets of `lat`'s.
-    let lat_pred = lat + dr.x / (earth::meridian_radius_from_sin(sc.0) + h_m);
-    let (s_p, _) = sin_cos_offset(sc, lat, 0.5 * (lat_pred - lat));
-    let lat_new = lat + dr.x / (earth::meridian_radius_from_sin(s_p) + h_m);
-    let (s_m, c_m) = sin_cos_offset(sc, lat, 0.5 * (lat_new - lat));
-    let lon_new = lon + dr.y / ((earth::transverse_radius_from_sin(s_m) + h_m) * c_m);
+    let (lat_new, lon_new) = if delta_pred.abs() < max_linear_offset {
+        let lat_new = lat + dr.x / (rn * (1.0 + 3.0 * kappa * delta_pred) + h_m);
+        let delta = 0.5 * (lat_new - lat);
+        let (_, c_m) = sin_cos_offset(sc, lat, delta);
+        let lon_new = lon + dr.y / ((re * (1.0 + kappa * delta) + h_m) * c_m);
+        (lat_new, lon_new)
+    } else {
+        // the mid-point latitudes' sin/cos are offsets of `lat`'s
+        let (s_p, _) = sin_cos_offset(sc, lat, delta_pred);
+        let lat_new = lat + dr.x / (earth::meridian_radius_from_sin(s_p) + h_m);
+        let (s_m, c_m) = sin_cos_offset(sc, lat, 0.5 * (lat_new - lat));
+        let lon_new = lon + dr.y / ((earth::transverse_radius_from_sin(s_m) + h_m) * c_m);
+        (lat_new, lon_new)
+    };
     (lat_new, lon_new, h_new)
 }
 
@@ -427,7 +423,7 @@ mod tests {
                     let vel = Vector3::new(0.79 * speed, -0.61 * speed, 0.1);
                     let lon = 2.2;
                     let fast = position_update(lat, sc, lon, h, &vel_prev, &vel, dt);
-                    let exact = position_update_exact(lat, sc, lon, h, &vel_prev, &vel, dt);
+                    let exact = position_update_with(lat, sc, lon, h, (&vel_prev, &vel), dt, 0.0);
                     let step = (exact.0 - lat).abs().max((exact.1 - lon).abs());
                     let tol = |x: f64| ulps(x) + 1e-12 * step;
                     assert!(
