@@ -43,10 +43,21 @@ pub fn meridian_radius(lat: f64) -> f64 {
     meridian_radius_from_sin(lat.sin())
 }
 
+/// `(1 - e^2 sin^2 L, sqrt(1 - e^2 sin^2 L))` from `sin L`: the one expression of
+/// every `*_from_sin` function below, written once so that the compiler computes the
+/// square root once where several of them are evaluated at the same latitude (the
+/// strapdown's mid-interval radii and gravity, its position update's radii).
+#[inline]
+fn ellipsoid_factor(s: f64) -> (f64, f64) {
+    let d = 1.0 - E2 * (s * s);
+    (d, d.sqrt())
+}
+
 /// [`meridian_radius`] from `sin L` (the strapdown evaluates `sin L` once per step).
+#[inline]
 pub(crate) fn meridian_radius_from_sin(s: f64) -> f64 {
-    let d = 1.0 - E2 * s * s;
-    A * (1.0 - E2) / (d * d.sqrt())
+    let (d, w) = ellipsoid_factor(s);
+    A * (1.0 - E2) / (d * w)
 }
 
 /// Transverse (prime-vertical, east-west) radius of curvature, often `R_E` or `R_N`:
@@ -59,24 +70,17 @@ pub fn transverse_radius(lat: f64) -> f64 {
 }
 
 /// [`transverse_radius`] from `sin L`.
+#[inline]
 pub(crate) fn transverse_radius_from_sin(s: f64) -> f64 {
-    A / (1.0 - E2 * s * s).sqrt()
+    A / ellipsoid_factor(s).1
 }
 
-/// `(R_N, R_E, gamma)` from `sin L` and `h`: [`meridian_radius_from_sin`],
-/// [`transverse_radius_from_sin`] and [`normal_gravity_from_sin`] with their common
-/// `sqrt(1 - e^2 sin^2 L)` taken once (the strapdown's mid-interval terms need all
-/// three at the same latitude).
-pub(crate) fn radii_and_gravity_from_sin(s: f64, h: f64) -> (f64, f64, f64) {
-    let s2 = s * s;
-    let d = 1.0 - E2 * s2;
-    let w = d.sqrt();
-    let gamma_0 = GAMMA_EQUATOR * (1.0 + SOMIGLIANA_K * s2) / w;
-    (
-        A * (1.0 - E2) / (d * w),
-        A / w,
-        gamma_0 * free_air_factor(s2, h),
-    )
+/// `kappa = e^2 sin L cos L / (1 - e^2 sin^2 L)` from `(sin L, cos L)`: the
+/// logarithmic derivatives of the radii, `dR_E/dL = kappa R_E` and `dR_N/dL = 3 kappa
+/// R_N` (differentiate Groves eq. 2.105-2.106).
+#[inline]
+pub(crate) fn radius_log_derivative_from_sin_cos(s: f64, c: f64) -> f64 {
+    E2 * s * c / ellipsoid_factor(s).0
 }
 
 /// The free-air factor `1 - (2/a)(1 + f + m - 2 f sin^2 L) h + (3/a^2) h^2` of
@@ -110,9 +114,10 @@ pub fn normal_gravity(lat: f64, h: f64) -> f64 {
 }
 
 /// [`normal_gravity`] from `sin L`.
+#[inline]
 pub(crate) fn normal_gravity_from_sin(s: f64, h: f64) -> f64 {
-    let s2 = s.powi(2);
-    let gamma_0 = GAMMA_EQUATOR * (1.0 + SOMIGLIANA_K * s2) / (1.0 - E2 * s2).sqrt();
+    let s2 = s * s;
+    let gamma_0 = GAMMA_EQUATOR * (1.0 + SOMIGLIANA_K * s2) / ellipsoid_factor(s).1;
     gamma_0 * free_air_factor(s2, h)
 }
 

@@ -114,10 +114,11 @@ pub(crate) fn mid_terms(
     let sin_cos_lat = lat.sin_cos();
     let (s, c) = sin_cos_offset(sin_cos_lat, lat, lat_m - lat);
     let w_ie = Vector3::new(OMEGA_IE * c, 0.0, -OMEGA_IE * s);
-    let (rn, re, gamma) = earth::radii_and_gravity_from_sin(s, h_m);
-    let (rn, re) = (rn + h_m, re + h_m);
+    // (the three share one square root, see earth::ellipsoid_factor)
+    let re = earth::transverse_radius_from_sin(s) + h_m;
+    let rn = earth::meridian_radius_from_sin(s) + h_m;
     let w_en = Vector3::new(vel_m.y / re, -vel_m.x / rn, -vel_m.y * (s / c) / re);
-    let g = Vector3::new(0.0, 0.0, gamma);
+    let g = Vector3::new(0.0, 0.0, earth::normal_gravity_from_sin(s, h_m));
     MidTerms {
         zeta: (w_ie + w_en) * dt,
         dv_grav_cor: (g - (w_ie * 2.0 + w_en).cross(&vel_m)) * dt,
@@ -198,10 +199,9 @@ fn position_update_with(
     let h_new = h - dr.z;
     let h_m = 0.5 * (h + h_new);
     let (s, c) = sc;
-    let d = 1.0 - earth::E2 * (s * s);
-    let w = d.sqrt();
-    let (rn, re) = (earth::A * (1.0 - earth::E2) / (d * w), earth::A / w);
-    let kappa = earth::E2 * s * c / d;
+    let rn = earth::meridian_radius_from_sin(s);
+    let re = earth::transverse_radius_from_sin(s);
+    let kappa = earth::radius_log_derivative_from_sin_cos(s, c);
     // half the latitude step, predicted with R_N(L)
     let delta_pred = 0.5 * dr.x / (rn + h_m);
     // (false for a NaN offset too: the exact path then carries the NaN to the checks)
