@@ -236,11 +236,7 @@ impl<const N: usize> KalmanFilter<N> {
         q: &SMatrix<f64, N, N>,
         new_time: Time,
     ) -> Result<(), EstimatorError> {
-        check_time("predict", new_time, self.time)?;
-        let x_pred = linalg::mat_vec(f, &self.x);
-        self.predict_core(x_pred, f, q, true, new_time, || {
-            check_finite("transition matrix F", f.as_slice(), N, N, new_time)
-        })
+        self.predict_linear(f, q, true, new_time)
     }
 
     /// [`KalmanFilter::predict`] with a process noise checked once
@@ -254,9 +250,22 @@ impl<const N: usize> KalmanFilter<N> {
         noise: &ProcessNoise<N>,
         new_time: Time,
     ) -> Result<(), EstimatorError> {
+        self.predict_linear(f, noise.matrix(), false, new_time)
+    }
+
+    /// `x = F x`, then [`KalmanFilter::predict_core`]: [`KalmanFilter::predict`]
+    /// (`check_q`) and [`KalmanFilter::predict_with_noise`] (`Q` checked already).
+    #[inline(always)]
+    fn predict_linear(
+        &mut self,
+        f: &SMatrix<f64, N, N>,
+        q: &SMatrix<f64, N, N>,
+        check_q: bool,
+        new_time: Time,
+    ) -> Result<(), EstimatorError> {
         check_time("predict", new_time, self.time)?;
         let x_pred = linalg::mat_vec(f, &self.x);
-        self.predict_core(x_pred, f, noise.matrix(), false, new_time, || {
+        self.predict_core(x_pred, f, q, check_q, new_time, || {
             check_finite("transition matrix F", f.as_slice(), N, N, new_time)
         })
     }

@@ -533,7 +533,7 @@ pub(crate) fn is_positive_definite<const N: usize>(a: &SMatrix<f64, N, N>) -> bo
                 let (p, q, t) = (at(&w, j, j), at(&w, j, j + 1), at(&w, j + 1, j + 1));
                 let det = p * t - q * q;
                 // p > 0 and det > 0, both finite (NaN fails every comparison)
-                if !(p > 0.0 && det > 0.0 && p <= f64::MAX && det <= f64::MAX) {
+                if !(positive_finite(p) && positive_finite(det)) {
                     return false;
                 }
                 let inv = 1.0 / det;
@@ -547,7 +547,7 @@ pub(crate) fn is_positive_definite<const N: usize>(a: &SMatrix<f64, N, N>) -> bo
                 }
             } else {
                 let d = at(&w, j, j);
-                if !(d > 0.0 && d <= f64::MAX) {
+                if !positive_finite(d) {
                     return false;
                 }
             }
