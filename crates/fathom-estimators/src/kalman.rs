@@ -6,6 +6,7 @@ use crate::{
     EstimatorError, MeasurementNoise, ProcessNoise,
     error::check_finite_entries,
     gating::{Gate, GateThreshold},
+    lanes::Isa,
     linalg, simd,
 };
 use fathom_core::{
@@ -334,9 +335,9 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<(), EstimatorError> {
         simd::dispatch(
             #[inline(always)]
-            || {
+            |isa| {
                 let (p, p_pred) = self.covariance_and_spare();
-                let q_ok = linalg::propagate_covariance(f, p, q, check_q, p_pred);
+                let q_ok = linalg::propagate_covariance(isa, f, p, q, check_q, p_pred);
                 if !(q_ok
                     && linalg::all_finite(x_pred.as_slice())
                     && linalg::is_positive_definite(p_pred))
@@ -367,10 +368,11 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<UpdateInfo<M>, EstimatorError> {
         simd::dispatch(
             #[inline(always)]
-            || {
+            |isa| {
                 let nu = linalg::innovation_of(z, h, &self.x);
-                let prep = self.prepare(&nu, h, r, true, || measurement_checks(z, h, self.time))?;
-                self.apply(&nu, prep)
+                let prep =
+                    self.prepare(isa, &nu, h, r, true, || measurement_checks(z, h, self.time))?;
+                self.apply(isa, &nu, prep)
             },
         )
     }
@@ -388,9 +390,10 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<UpdateInfo<M>, EstimatorError> {
         simd::dispatch(
             #[inline(always)]
-            || {
-                let prep = self.prepare(nu, h, r, true, || innovation_checks(nu, h, self.time))?;
-                self.apply(nu, prep)
+            |isa| {
+                let prep =
+                    self.prepare(isa, nu, h, r, true, || innovation_checks(nu, h, self.time))?;
+                self.apply(isa, nu, prep)
             },
         )
     }
@@ -408,12 +411,12 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<UpdateInfo<M>, EstimatorError> {
         simd::dispatch(
             #[inline(always)]
-            || {
+            |isa| {
                 let nu = linalg::innovation_of(z, h, &self.x);
-                let prep = self.prepare(&nu, h, noise.matrix(), false, || {
+                let prep = self.prepare(isa, &nu, h, noise.matrix(), false, || {
                     measurement_checks(z, h, self.time)
                 })?;
-                self.apply(&nu, prep)
+                self.apply(isa, &nu, prep)
             },
         )
     }
@@ -433,8 +436,8 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<Gate<M>, EstimatorError> {
         simd::dispatch(
             #[inline(always)]
-            || {
-                let prep = self.prepare(nu, h, noise.matrix(), false, || {
+            |isa| {
+                let prep = self.prepare(isa, nu, h, noise.matrix(), false, || {
                     innovation_checks(nu, h, self.time)
                 })?;
                 if let Some(g) = gate
@@ -442,7 +445,7 @@ impl<const N: usize> KalmanFilter<N> {
                 {
                     return Ok(Gate::Rejected { nis: prep.nis });
                 }
-                self.apply(nu, prep).map(Gate::Accepted)
+                self.apply(isa, nu, prep).map(Gate::Accepted)
             },
         )
     }
@@ -461,10 +464,11 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<Gate<M>, EstimatorError> {
         simd::dispatch(
             #[inline(always)]
-            || {
+            |isa| {
                 let nu = linalg::innovation_of(z, h, &self.x);
-                let prep = self.prepare(&nu, h, r, true, || measurement_checks(z, h, self.time))?;
-                self.gated_apply(&nu, prep, gate)
+                let prep =
+                    self.prepare(isa, &nu, h, r, true, || measurement_checks(z, h, self.time))?;
+                self.gated_apply(isa, &nu, prep, gate)
             },
         )
     }
@@ -482,9 +486,10 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<Gate<M>, EstimatorError> {
         simd::dispatch(
             #[inline(always)]
-            || {
-                let prep = self.prepare(nu, h, r, true, || innovation_checks(nu, h, self.time))?;
-                self.gated_apply(nu, prep, gate)
+            |isa| {
+                let prep =
+                    self.prepare(isa, nu, h, r, true, || innovation_checks(nu, h, self.time))?;
+                self.gated_apply(isa, nu, prep, gate)
             },
         )
     }
@@ -492,6 +497,7 @@ impl<const N: usize> KalmanFilter<N> {
     #[inline(always)]
     fn gated_apply<const M: usize>(
         &mut self,
+        isa: Isa,
         nu: &SVector<f64, M>,
         prep: Prepared<N, M>,
         gate: GateThreshold,
@@ -499,7 +505,7 @@ impl<const N: usize> KalmanFilter<N> {
         if !gate.accepts(prep.nis) {
             return Ok(Gate::Rejected { nis: prep.nis });
         }
-        self.apply(nu, prep).map(Gate::Accepted)
+        self.apply(isa, nu, prep).map(Gate::Accepted)
     }
 
     /// Forms `U = P H^T` and `S = H P H^T + R`, prepares the solves with `S`
@@ -514,6 +520,7 @@ impl<const N: usize> KalmanFilter<N> {
     #[inline(always)]
     fn prepare<const M: usize>(
         &self,
+        isa: Isa,
         nu: &SVector<f64, M>,
         h: &SMatrix<f64, M, N>,
         r: &SMatrix<f64, M, M>,
@@ -522,7 +529,7 @@ impl<const N: usize> KalmanFilter<N> {
     ) -> Result<Prepared<N, M>, EstimatorError> {
         // R's test first (independent of P): it overlaps with the products below
         let r_ok = !check_r || linalg::covariance_surely_valid(r);
-        let (pht, s) = linalg::innovation(self.covariance(), h, r);
+        let (pht, s) = linalg::innovation(isa, self.covariance(), h, r);
         let solver = linalg::SpdSolver::new(&s);
         let nis = solver.as_ref().map_or(f64::NAN, |l| l.quad_form(nu));
         if !(r_ok && nis.is_finite()) {
@@ -547,14 +554,15 @@ impl<const N: usize> KalmanFilter<N> {
     #[inline(always)]
     fn apply<const M: usize>(
         &mut self,
+        isa: Isa,
         nu: &SVector<f64, M>,
         prep: Prepared<N, M>,
     ) -> Result<UpdateInfo<M>, EstimatorError> {
-        let k = prep.solver.solve_right(&prep.pht);
+        let k = prep.solver.solve_right(isa, &prep.pht);
         let x_new = self.x + linalg::mat_vec(&k, nu);
         let time = self.time;
         let (p, p_new) = self.covariance_and_spare();
-        linalg::joseph_update(p, &prep.pht, &k, &prep.s, p_new);
+        linalg::joseph_update(isa, p, &prep.pht, &k, &prep.s, p_new);
         if !(linalg::all_finite(x_new.as_slice()) && linalg::is_positive_definite(p_new)) {
             return Err(updated_error(&x_new, p_new, time));
         }
@@ -624,7 +632,7 @@ impl<const N: usize> KalmanFilter<N> {
     {
         simd::dispatch(
             #[inline(always)]
-            || {
+            |_isa| {
                 let t = self.time;
                 let mut x = self.x;
                 let mut p = *self.covariance();

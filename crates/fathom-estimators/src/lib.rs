@@ -92,6 +92,7 @@ pub mod fusion;
 pub mod gating;
 pub mod integrated_nav;
 pub mod kalman;
+pub(crate) mod lanes;
 pub(crate) mod linalg;
 pub mod models;
 pub mod noise;

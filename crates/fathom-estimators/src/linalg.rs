@@ -6,6 +6,9 @@
 //! predicate fails, see [`crate::kalman`]). Results that the next step reads are
 //! written into the caller's buffer one whole column at a time.
 //!
+//! The column loops run on explicit vector chunks ([`crate::lanes::Seg`]) of the
+//! instruction set the caller was dispatched to ([`crate::simd::dispatch`]).
+//!
 //! Costs (multiply-adds, `N` states, `M` measurements): prediction `N^3 + N^2 (N + 1)
 //! / 2` (`F P`, then the upper triangle of `(F P) F^T`); innovation `N^2 M + N M^2`;
 //! gain `N M^2` (product with `S^-1`, or two triangular solves for `M > 3`);
@@ -15,6 +18,7 @@
 //! lengths and the triangular ones are written out per column (`unrolled_for!`),
 //! so the compiler unrolls and vectorizes them. See `docs/performance.md`.
 
+use crate::lanes::{Isa, Seg};
 use fathom_core::gaussian::SYMMETRY_TOLERANCE;
 use nalgebra::{ArrayStorage, SMatrix, SVector};
 
@@ -85,19 +89,20 @@ fn axmy<const R: usize>(y: &mut [f64; R], a: f64, x: &[f64; R]) {
 }
 
 /// `A B` for column arrays: column `j` is `sum_k A[:, k] B[k, j]`, accumulated in
-/// `k` order (the order nalgebra's `gemv` uses).
+/// `k` order (the order nalgebra's `gemv` uses), one column segment at a time.
 #[inline(always)]
 fn mul<const R: usize, const K: usize, const C: usize>(
+    isa: Isa,
     a: &Cols<R, K>,
     b: &Cols<K, C>,
 ) -> Cols<R, C> {
     let mut out = [[0.0; R]; C];
     for j in 0..C {
-        let mut col = scaled(b[j][0], &a[0]);
+        let mut col = Seg::mul(isa, &a[0], b[j][0], R);
         for k in 1..K {
-            axpy(&mut col, b[j][k], &a[k]);
+            col.add_mul(isa, &a[k], b[j][k], R);
         }
-        out[j] = col;
+        col.store(&mut out[j], R);
     }
     out
 }
@@ -153,9 +158,11 @@ pub(crate) fn all_finite(data: &[f64]) -> bool {
 /// Predicted covariance `F P F^T + (Q + Q^T) / 2`, written to `p_pred`, and whether
 /// `Q` passes the process-noise test of [`crate::kalman`] (non-negative diagonal,
 /// symmetric within [`SYMMETRY_TOLERANCE`] relative to the largest diagonal entry;
-/// finiteness is not tested here). With `check_q = false` (a [`crate::ProcessNoise`],
-/// checked and exactly symmetric) the test is skipped and the upper triangle of `Q`
-/// is added as it is, which is the same number: `0.5 (u + u) = u`.
+/// finiteness is not tested here). The diagonal of `Q` is added as it is (`0.5 (d +
+/// d) = d`; a `d` so large that `d + d` overflows is not a variance anyway). With
+/// `check_q = false` (a [`crate::ProcessNoise`], checked and exactly symmetric) the
+/// test is skipped and the upper triangle of `Q` is added as it is, which is the same
+/// number: `0.5 (u + u) = u`.
 ///
 /// `A = F P`, then only the upper triangle of `A F^T` (column `j`, rows `0..=j`:
 /// `sum_k A[:, k] F[j, k]`), mirrored: the result is exactly symmetric. A non-finite
@@ -165,6 +172,7 @@ pub(crate) fn all_finite(data: &[f64]) -> bool {
 /// positive-definiteness test of the result also rejects non-finite `F` or `Q`.
 #[inline(always)]
 pub(crate) fn propagate_covariance<const N: usize>(
+    isa: Isa,
     f: &SMatrix<f64, N, N>,
     p: &SMatrix<f64, N, N>,
     q: &SMatrix<f64, N, N>,
@@ -172,41 +180,35 @@ pub(crate) fn propagate_covariance<const N: usize>(
     p_pred: &mut SMatrix<f64, N, N>,
 ) -> bool {
     let (fc, qc) = (cols(f), cols(q));
-    let a = mul(fc, cols(p));
-    let mut scale = f64::MIN_POSITIVE;
+    let a = mul(isa, fc, cols(p));
+    // the upper triangle of (Q + Q^T) / 2 (of Q itself when it is checked already)
+    let mut q_upper = *qc;
     let mut q_ok = true;
     if check_q {
+        let mut scale = f64::MIN_POSITIVE;
         for j in 0..N {
             let d = qc[j][j];
             q_ok &= d >= 0.0;
             scale = if d > scale { d } else { scale };
         }
+        let threshold = SYMMETRY_TOLERANCE * scale;
+        unrolled_for!(j in 0..N, {
+            for i in 0..j {
+                let (upper, lower) = (qc[j][i], qc[i][j]);
+                q_ok &= (upper - lower).abs() <= threshold;
+                q_upper[j][i] = 0.5 * (upper + lower);
+            }
+        });
     }
-    let threshold = SYMMETRY_TOLERANCE * scale;
     let mut upper = [[0.0; N]; N];
     unrolled_for!(j in 0..N, {
         // rows 0..=j of column j of A F^T: sum_k A[:, k] F[j, k] (F[j, k] = fc[k][j])
-        let mut col = [0.0; N];
-        for i in 0..j + 1 {
-            col[i] = a[0][i] * fc[0][j];
-        }
+        let mut col = Seg::mul(isa, &a[0], fc[0][j], j + 1);
         for k in 1..N {
-            let fjk = fc[k][j];
-            for i in 0..j + 1 {
-                col[i] += a[k][i] * fjk;
-            }
+            col.add_mul(isa, &a[k], fc[k][j], j + 1);
         }
-        for i in 0..j + 1 {
-            if check_q {
-                let (upper, lower) = (qc[j][i], qc[i][j]);
-                q_ok &= (upper - lower).abs() <= threshold;
-                col[i] += 0.5 * (upper + lower);
-            } else {
-                // a checked `Q` is exactly symmetric: 0.5 (u + u) == u
-                col[i] += qc[j][i];
-            }
-        }
-        upper[j] = col;
+        col.add(isa, &q_upper[j], j + 1);
+        col.store(&mut upper[j], j + 1);
     });
     store_symmetric(&upper, &mut p_pred.data.0);
     q_ok
@@ -236,6 +238,7 @@ fn store_symmetric<const N: usize>(upper: &Cols<N, N>, out: &mut Cols<N, N>) {
 /// `S` entry non-finite: [`SpdSolver::new`] then fails.
 #[inline(always)]
 pub(crate) fn innovation<const N: usize, const M: usize>(
+    isa: Isa,
     p: &SMatrix<f64, N, N>,
     h: &SMatrix<f64, M, N>,
     r: &SMatrix<f64, M, M>,
@@ -244,13 +247,13 @@ pub(crate) fn innovation<const N: usize, const M: usize>(
     // U[:, m] = sum_k P[:, k] H[m, k]
     let mut u = [[0.0; N]; M];
     for m in 0..M {
-        let mut col = scaled(hc[0][m], &pc[0]);
+        let mut col = Seg::mul(isa, &pc[0], hc[0][m], N);
         for k in 1..N {
-            axpy(&mut col, hc[k][m], &pc[k]);
+            col.add_mul(isa, &pc[k], hc[k][m], N);
         }
-        u[m] = col;
+        col.store(&mut u[m], N);
     }
-    let mut s = mul(hc, &u);
+    let mut s = mul(isa, hc, &u);
     for j in 0..M {
         for i in 0..j + 1 {
             let v = s[j][i] + 0.5 * (rc[j][i] + rc[i][j]);
@@ -279,6 +282,10 @@ pub(crate) fn innovation<const N: usize, const M: usize>(
 pub(crate) struct SpdSolver<const M: usize> {
     /// `M <= 3`: `S^-1`, column-major. Unused otherwise.
     inv: Cols<M, M>,
+    /// `M <= 3`: the adjugate of `S` (`S^-1 = adj / det`). Unused otherwise.
+    adj: Cols<M, M>,
+    /// `M <= 3`: `1 / det S`. Unused otherwise.
+    det_inv: f64,
     /// `M > 3`: column-major unit lower factor, `l[c][r] = L[r, c]` for `r > c`.
     l: Cols<M, M>,
     /// `M > 3`: `1 / D`.
@@ -299,6 +306,8 @@ impl<const M: usize> SpdSolver<M> {
         let sc = cols(s);
         let mut out = Self {
             inv: [[0.0; M]; M],
+            adj: [[0.0; M]; M],
+            det_inv: 0.0,
             l: [[0.0; M]; M],
             d_inv: [0.0; M],
         };
@@ -311,7 +320,9 @@ impl<const M: usize> SpdSolver<M> {
                 if !positive_finite(a) {
                     return None;
                 }
-                out.inv[0][0] = 1.0 / a;
+                out.adj[0][0] = 1.0;
+                out.det_inv = 1.0 / a;
+                out.inv[0][0] = out.det_inv;
             }
             2 => {
                 let (a, b, d) = (lo(0, 0), lo(1, 0), lo(1, 1));
@@ -320,6 +331,11 @@ impl<const M: usize> SpdSolver<M> {
                     return None;
                 }
                 let r = 1.0 / det;
+                out.adj[0][0] = d;
+                out.adj[1][1] = a;
+                out.adj[0][1] = -b;
+                out.adj[1][0] = -b;
+                out.det_inv = r;
                 out.inv[0][0] = d * r;
                 out.inv[1][1] = a * r;
                 out.inv[0][1] = -b * r;
@@ -341,8 +357,10 @@ impl<const M: usize> SpdSolver<M> {
                 }
                 let r = 1.0 / det;
                 let adj = [[c00, c01, c02], [c01, c11, c12], [c02, c12, c22]];
+                out.det_inv = r;
                 for j in 0..3 {
                     for i in 0..3 {
+                        out.adj[j][i] = adj[j][i];
                         out.inv[j][i] = adj[j][i] * r;
                     }
                 }
@@ -400,13 +418,25 @@ impl<const M: usize> SpdSolver<M> {
         nis
     }
 
-    /// `K = U S^-1` (`N x M`), i.e. the solution of `K S = U`. `M <= 3`: the product
-    /// with `S^-1`. `M > 3`: `Y = U L^-T` (columns in increasing order), `Z = Y D^-1`,
-    /// `K = Z L^-1` (columns in decreasing order). Both `N M^2` multiply-adds.
+    /// `K = U S^-1` (`N x M`), i.e. the solution of `K S = U`. `M <= 3`: `(U adj S)
+    /// / det S`, so that the `N M^2` products run while the division is still on its
+    /// way and only `N M` multiplications wait for it (on the critical path of a
+    /// Kalman step). `M > 3`: `Y = U L^-T` (columns in increasing order), `Z = Y
+    /// D^-1`, `K = Z L^-1` (columns in decreasing order). Both `N M^2` multiply-adds.
     #[inline(always)]
-    pub(crate) fn solve_right<const N: usize>(&self, u: &SMatrix<f64, N, M>) -> SMatrix<f64, N, M> {
+    pub(crate) fn solve_right<const N: usize>(
+        &self,
+        isa: Isa,
+        u: &SMatrix<f64, N, M>,
+    ) -> SMatrix<f64, N, M> {
         if M <= 3 {
-            return matrix(mul(cols(u), &self.inv));
+            // (U adj S) / det S: the products do not wait for the division
+            let u_adj = mul(isa, cols(u), &self.adj);
+            let mut k = [[0.0; N]; M];
+            for j in 0..M {
+                Seg::mul(isa, &u_adj[j], self.det_inv, N).store(&mut k[j], N);
+            }
+            return matrix(k);
         }
         let mut k = *cols(u);
         // Y L^T = U: Y[:, j] = U[:, j] - sum_{i < j} L[j, i] Y[:, i]
@@ -446,6 +476,7 @@ impl<const M: usize> SpdSolver<M> {
 /// mirrored: exactly symmetric) instead of `2 N^3 + ...` for the product form.
 #[inline(always)]
 pub(crate) fn joseph_update<const N: usize, const M: usize>(
+    isa: Isa,
     p: &SMatrix<f64, N, N>,
     pht: &SMatrix<f64, N, M>,
     k: &SMatrix<f64, N, M>,
@@ -454,25 +485,23 @@ pub(crate) fn joseph_update<const N: usize, const M: usize>(
 ) {
     let (pc, uc, kc, sc) = (cols(p), cols(pht), cols(k), cols(s));
     // W = U - K S
-    let mut w = *uc;
+    let mut w = [[0.0; N]; M];
     for j in 0..M {
+        let mut col = Seg::load(&uc[j], N);
         for i in 0..M {
-            axmy(&mut w[j], sc[j][i], &kc[i]);
+            col.sub_mul(isa, &kc[i], sc[j][i], N);
         }
+        col.store(&mut w[j], N);
     }
     // rows 0..=j of column j of P - K U^T - W K^T:
     // P[:, j] - sum_m (K[:, m] U[j, m] + W[:, m] K[j, m])
     let mut upper = [[0.0; N]; N];
     unrolled_for!(j in 0..N, {
-        let mut col = [0.0; N];
-        col[..j + 1].copy_from_slice(&pc[j][..j + 1]);
+        let mut col = Seg::load(&pc[j], j + 1);
         for m in 0..M {
-            let (ujm, kjm) = (uc[m][j], kc[m][j]);
-            for i in 0..j + 1 {
-                col[i] -= kc[m][i] * ujm + w[m][i] * kjm;
-            }
+            col.sub_mul2(isa, (&kc[m], uc[m][j]), (&w[m], kc[m][j]), j + 1);
         }
-        upper[j] = col;
+        col.store(&mut upper[j], j + 1);
     });
     store_symmetric(&upper, &mut p_new.data.0);
 }
@@ -673,7 +702,7 @@ mod tests {
     ) -> (SMatrix<f64, N, N>, bool) {
         // a non-zero start: every entry must be overwritten
         let mut out = SMatrix::repeat(f64::NAN);
-        let ok = propagate_covariance(f, p, q, true, &mut out);
+        let ok = propagate_covariance(Isa::Portable, f, p, q, true, &mut out);
         (out, ok)
     }
 
@@ -685,7 +714,7 @@ mod tests {
         s: &SMatrix<f64, M, M>,
     ) -> SMatrix<f64, N, N> {
         let mut out = SMatrix::repeat(f64::NAN);
-        joseph_update(p, pht, k, s, &mut out);
+        joseph_update(Isa::Portable, p, pht, k, s, &mut out);
         out
     }
 
@@ -731,7 +760,7 @@ mod tests {
                 random::<3, 6>(&mut rng),
                 spd::<3>(&mut rng),
             );
-            let (u, s) = innovation(&p, &h, &r);
+            let (u, s) = innovation(Isa::Portable, &p, &h, &r);
             assert_relative_eq!(u, p * h.transpose(), epsilon = 1e-13);
             assert_eq!(s, s.transpose());
             assert_relative_eq!(s, h * p * h.transpose() + r, epsilon = 1e-12);
@@ -778,13 +807,13 @@ mod tests {
             let ldl = SpdSolver::new(&s).unwrap();
             // S^-1 itself as the solution of K S = I
             assert_relative_eq!(
-                ldl.solve_right(&Matrix3::identity()),
+                ldl.solve_right(Isa::Portable, &Matrix3::identity()),
                 inv,
                 epsilon = 1e-9,
                 max_relative = 1e-9
             );
             let u = random::<6, 3>(&mut rng);
-            assert_relative_eq!(ldl.solve_right(&u), u * inv, epsilon = 1e-9);
+            assert_relative_eq!(ldl.solve_right(Isa::Portable, &u), u * inv, epsilon = 1e-9);
             let nu = random::<3, 1>(&mut rng);
             assert_relative_eq!(
                 ldl.quad_form(&nu),

@@ -2,9 +2,11 @@
 //!
 //! The crate is built for the default `x86-64` target (SSE2). `dispatch` runs a
 //! closure compiled a second time with AVX2 enabled (through `pulp`, which `faer`
-//! already uses) when the CPU has it, so the `#[inline(always)]` kernels of
-//! `linalg` inlined into the closure use 4-wide vectors (measured: the 6-state /
-//! 3-measurement step ~10 % faster, the 9 / 3 step ~15 %). Rust never fuses a
+//! already uses) when the CPU has it, and hands the closure the instruction set
+//! ([`crate::lanes::Isa`]), so the `#[inline(always)]` kernels of `linalg` inlined
+//! into it do their column chunks with 4-wide vectors (measured: the 6-state /
+//! 3-measurement step ~10 % faster, the 9 / 3 step ~15 %; explicit chunks another
+//! ~5 %, see `docs/performance.md`). Rust never fuses a
 //! multiply and an add on its own and the compiler vectorizes only independent
 //! lanes, so both versions perform the same IEEE operations in the same order:
 //! results are bit-identical on every CPU (a test compares them, and CI runs it on
@@ -17,37 +19,50 @@
 
 use std::sync::OnceLock;
 
-/// The instruction set found at first use (one atomic load afterwards).
-fn arch() -> pulp::Arch {
-    static ARCH: OnceLock<pulp::Arch> = OnceLock::new();
+use crate::lanes::Isa;
+
+/// The AVX2 token when this CPU has AVX2 (and `FATHOM_SIMD=baseline` is not set),
+/// found at first use (one atomic load afterwards).
+#[cfg(target_arch = "x86_64")]
+fn avx2() -> Option<pulp::x86::V3> {
+    static AVX2: OnceLock<Option<pulp::x86::V3>> = OnceLock::new();
     #[cfg(test)]
     if tests::FORCE_BASELINE.with(std::cell::Cell::get) {
-        return pulp::Arch::Scalar;
+        return None;
     }
-    *ARCH.get_or_init(|| {
+    *AVX2.get_or_init(|| {
         if std::env::var_os("FATHOM_SIMD").is_some_and(|v| v == "baseline") {
-            pulp::Arch::Scalar
+            None
         } else {
-            pulp::Arch::new()
+            pulp::x86::V3::try_new()
         }
     })
 }
 
-/// Runs `f` compiled for the widest instruction set this CPU has. Only what is
-/// inlined into `f` benefits: the kernels are `#[inline(always)]`, and so must be the
-/// closure (`#[inline(always)] || ...`), or it stays a baseline function.
+/// Runs `f` compiled for the widest instruction set this CPU has, and hands it that
+/// instruction set for the explicit-lane kernels ([`Isa`]). Only what is inlined
+/// into `f` benefits: the kernels are `#[inline(always)]`, and so must be the
+/// closure (`#[inline(always)] |isa| ...`), or it stays a baseline function.
 #[inline(always)]
-pub(crate) fn dispatch<R>(f: impl FnOnce() -> R) -> R {
-    arch().dispatch(f)
+pub(crate) fn dispatch<R>(f: impl FnOnce(Isa) -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = avx2() {
+        return simd.vectorize(
+            #[inline(always)]
+            move || f(Isa::Avx2(simd)),
+        );
+    }
+    f(Isa::Portable)
 }
 
 /// The instruction set the Kalman kernels run with on this machine: `"avx2"` or
 /// `"baseline"` (SSE2 on x86-64; the only one on other architectures).
 pub fn kernel_instruction_set() -> &'static str {
-    match arch() {
-        pulp::Arch::Scalar => "baseline",
-        _ => "avx2",
+    #[cfg(target_arch = "x86_64")]
+    if avx2().is_some() {
+        return "avx2";
     }
+    "baseline"
 }
 
 #[cfg(test)]
