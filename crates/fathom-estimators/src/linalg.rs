@@ -18,7 +18,7 @@
 //! lengths and the triangular ones are written out per column (`unrolled_for!`),
 //! so the compiler unrolls and vectorizes them. See `docs/performance.md`.
 
-use crate::lanes::{Isa, Seg};
+use crate::lanes::{Isa, Seg, blocks};
 use fathom_core::gaussian::SYMMETRY_TOLERANCE;
 use nalgebra::{ArrayStorage, SMatrix, SVector};
 
@@ -98,11 +98,13 @@ fn mul<const R: usize, const K: usize, const C: usize>(
 ) -> Cols<R, C> {
     let mut out = [[0.0; R]; C];
     for j in 0..C {
-        let mut col = Seg::mul(isa, &a[0], b[j][0], R);
-        for k in 1..K {
-            col.add_mul(isa, &a[k], b[j][k], R);
+        for rows in blocks(R) {
+            let mut col = Seg::mul(isa, &a[0], b[j][0], rows);
+            for k in 1..K {
+                col.add_mul(isa, &a[k], b[j][k], rows);
+            }
+            col.store(&mut out[j], rows);
         }
-        col.store(&mut out[j], R);
     }
     out
 }
@@ -203,12 +205,14 @@ pub(crate) fn propagate_covariance<const N: usize>(
     let mut upper = [[0.0; N]; N];
     unrolled_for!(j in 0..N, {
         // rows 0..=j of column j of A F^T: sum_k A[:, k] F[j, k] (F[j, k] = fc[k][j])
-        let mut col = Seg::mul(isa, &a[0], fc[0][j], j + 1);
-        for k in 1..N {
-            col.add_mul(isa, &a[k], fc[k][j], j + 1);
+        for rows in blocks(j + 1) {
+            let mut col = Seg::mul(isa, &a[0], fc[0][j], rows);
+            for k in 1..N {
+                col.add_mul(isa, &a[k], fc[k][j], rows);
+            }
+            col.add(isa, &q_upper[j], rows);
+            col.store(&mut upper[j], rows);
         }
-        col.add(isa, &q_upper[j], j + 1);
-        col.store(&mut upper[j], j + 1);
     });
     store_symmetric(&upper, &mut p_pred.data.0);
     q_ok
@@ -247,11 +251,13 @@ pub(crate) fn innovation<const N: usize, const M: usize>(
     // U[:, m] = sum_k P[:, k] H[m, k]
     let mut u = [[0.0; N]; M];
     for m in 0..M {
-        let mut col = Seg::mul(isa, &pc[0], hc[0][m], N);
-        for k in 1..N {
-            col.add_mul(isa, &pc[k], hc[k][m], N);
+        for rows in blocks(N) {
+            let mut col = Seg::mul(isa, &pc[0], hc[0][m], rows);
+            for k in 1..N {
+                col.add_mul(isa, &pc[k], hc[k][m], rows);
+            }
+            col.store(&mut u[m], rows);
         }
-        col.store(&mut u[m], N);
     }
     let mut s = mul(isa, hc, &u);
     for j in 0..M {
@@ -434,7 +440,9 @@ impl<const M: usize> SpdSolver<M> {
             let u_adj = mul(isa, cols(u), &self.adj);
             let mut k = [[0.0; N]; M];
             for j in 0..M {
-                Seg::mul(isa, &u_adj[j], self.det_inv, N).store(&mut k[j], N);
+                for rows in blocks(N) {
+                    Seg::mul(isa, &u_adj[j], self.det_inv, rows).store(&mut k[j], rows);
+                }
             }
             return matrix(k);
         }
@@ -487,21 +495,25 @@ pub(crate) fn joseph_update<const N: usize, const M: usize>(
     // W = U - K S
     let mut w = [[0.0; N]; M];
     for j in 0..M {
-        let mut col = Seg::load(&uc[j], N);
-        for i in 0..M {
-            col.sub_mul(isa, &kc[i], sc[j][i], N);
+        for rows in blocks(N) {
+            let mut col = Seg::load(&uc[j], rows);
+            for i in 0..M {
+                col.sub_mul(isa, &kc[i], sc[j][i], rows);
+            }
+            col.store(&mut w[j], rows);
         }
-        col.store(&mut w[j], N);
     }
     // rows 0..=j of column j of P - K U^T - W K^T:
     // P[:, j] - sum_m (K[:, m] U[j, m] + W[:, m] K[j, m])
     let mut upper = [[0.0; N]; N];
     unrolled_for!(j in 0..N, {
-        let mut col = Seg::load(&pc[j], j + 1);
-        for m in 0..M {
-            col.sub_mul2(isa, (&kc[m], uc[m][j]), (&w[m], kc[m][j]), j + 1);
+        for rows in blocks(j + 1) {
+            let mut col = Seg::load(&pc[j], rows);
+            for m in 0..M {
+                col.sub_mul2(isa, (&kc[m], uc[m][j]), (&w[m], kc[m][j]), rows);
+            }
+            col.store(&mut upper[j], rows);
         }
-        col.store(&mut upper[j], j + 1);
     });
     store_symmetric(&upper, &mut p_new.data.0);
 }
@@ -749,6 +761,52 @@ mod tests {
         assert!(ok(Matrix2::new(1.0, 0.5, 0.5 + 1e-10, 2.0))); // within tolerance
         assert!(!ok(Matrix2::new(1.0, 0.5, 0.5 + 1e-8, 2.0)));
         assert!(!ok(Matrix2::new(1.0, 0.0, 0.0, -1e-300)));
+    }
+
+    /// The kernels against plain nalgebra products for sizes below, at and above one
+    /// segment (16 rows, so 17 and 20 take two), on every instruction set.
+    fn kernels_case<const N: usize, const M: usize>(rng: &mut ChaCha8Rng) {
+        for isa in crate::lanes::isas() {
+            let (f, p, q) = (random::<N, N>(rng), spd::<N>(rng), spd::<N>(rng));
+            let (h, r) = (random::<M, N>(rng), spd::<M>(rng));
+            let mut pred = SMatrix::<f64, N, N>::repeat(f64::NAN);
+            assert!(propagate_covariance(isa, &f, &p, &q, true, &mut pred));
+            let full = f * p * f.transpose() + q;
+            assert_eq!(pred, pred.transpose());
+            assert_relative_eq!(pred, full, epsilon = 1e-10, max_relative = 1e-12);
+            let (u, s) = innovation(isa, &p, &h, &r);
+            assert_relative_eq!(u, p * h.transpose(), epsilon = 1e-11, max_relative = 1e-12);
+            assert_relative_eq!(
+                s,
+                h * p * h.transpose() + r,
+                epsilon = 1e-10,
+                max_relative = 1e-12
+            );
+            let solver = SpdSolver::new(&s).unwrap();
+            let k = solver.solve_right(isa, &u);
+            let k_ref = u * s.try_inverse().unwrap();
+            assert_relative_eq!(k, k_ref, epsilon = 1e-9, max_relative = 1e-9);
+            let mut joseph_p = SMatrix::<f64, N, N>::repeat(f64::NAN);
+            joseph_update(isa, &p, &u, &k, &s, &mut joseph_p);
+            let a = SMatrix::<f64, N, N>::identity() - k * h;
+            let product = a * p * a.transpose() + k * r * k.transpose();
+            assert_eq!(joseph_p, joseph_p.transpose());
+            assert_relative_eq!(joseph_p, product, epsilon = 1e-9, max_relative = 1e-9);
+        }
+    }
+
+    #[test]
+    fn kernels_match_nalgebra_for_every_size_and_instruction_set() {
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        kernels_case::<1, 1>(&mut rng);
+        kernels_case::<2, 1>(&mut rng);
+        kernels_case::<5, 2>(&mut rng);
+        kernels_case::<6, 3>(&mut rng);
+        kernels_case::<9, 3>(&mut rng);
+        kernels_case::<15, 4>(&mut rng);
+        kernels_case::<16, 3>(&mut rng);
+        kernels_case::<17, 3>(&mut rng);
+        kernels_case::<20, 5>(&mut rng);
     }
 
     #[test]
