@@ -273,7 +273,8 @@ pub(crate) fn innovation<const N: usize, const M: usize>(
 /// Solver for the innovation covariance `S` (symmetric positive definite, `M x M`),
 /// used for the gain `K = U S^-1` and the NIS `nu^T S^-1 nu`:
 ///
-/// - `M <= 3`: `S^-1 = adj(S) / det S` in closed form. Positive definiteness by
+/// - `M <= 3`: `S^-1 = adj(S) / det S` in closed form, kept as `adj(S)` and `1 / det
+///   S` (gain `(U adj S) / det S`, NIS `(nu^T adj S nu) / det S`). Positive definiteness by
 ///   Sylvester's criterion (leading minors `s_00`, `s_00 s_11 - s_01^2`, `det S`
 ///   all `> 0` and finite). The minors and cofactors are products of entries of
 ///   `S`, so the one division waits for them only, not for a chain of pivots (the
@@ -286,9 +287,8 @@ pub(crate) fn innovation<const N: usize, const M: usize>(
 ///   division per pivot), gain by triangular solves, no explicit inverse.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct SpdSolver<const M: usize> {
-    /// `M <= 3`: `S^-1`, column-major. Unused otherwise.
-    inv: Cols<M, M>,
-    /// `M <= 3`: the adjugate of `S` (`S^-1 = adj / det`). Unused otherwise.
+    /// `M <= 3`: the adjugate of `S` (`S^-1 = adj / det`), column-major. Unused
+    /// otherwise.
     adj: Cols<M, M>,
     /// `M <= 3`: `1 / det S`. Unused otherwise.
     det_inv: f64,
@@ -311,7 +311,6 @@ impl<const M: usize> SpdSolver<M> {
     pub(crate) fn new(s: &SMatrix<f64, M, M>) -> Option<Self> {
         let sc = cols(s);
         let mut out = Self {
-            inv: [[0.0; M]; M],
             adj: [[0.0; M]; M],
             det_inv: 0.0,
             l: [[0.0; M]; M],
@@ -328,7 +327,6 @@ impl<const M: usize> SpdSolver<M> {
                 }
                 out.adj[0][0] = 1.0;
                 out.det_inv = 1.0 / a;
-                out.inv[0][0] = out.det_inv;
             }
             2 => {
                 let (a, b, d) = (lo(0, 0), lo(1, 0), lo(1, 1));
@@ -336,16 +334,11 @@ impl<const M: usize> SpdSolver<M> {
                 if !(positive_finite(a) && positive_finite(det)) {
                     return None;
                 }
-                let r = 1.0 / det;
                 out.adj[0][0] = d;
                 out.adj[1][1] = a;
                 out.adj[0][1] = -b;
                 out.adj[1][0] = -b;
-                out.det_inv = r;
-                out.inv[0][0] = d * r;
-                out.inv[1][1] = a * r;
-                out.inv[0][1] = -b * r;
-                out.inv[1][0] = -b * r;
+                out.det_inv = 1.0 / det;
             }
             3 => {
                 let (a, b, c) = (lo(0, 0), lo(1, 0), lo(2, 0));
@@ -361,13 +354,11 @@ impl<const M: usize> SpdSolver<M> {
                 if !(positive_finite(a) && positive_finite(c22) && positive_finite(det)) {
                     return None;
                 }
-                let r = 1.0 / det;
+                out.det_inv = 1.0 / det;
                 let adj = [[c00, c01, c02], [c01, c11, c12], [c02, c12, c22]];
-                out.det_inv = r;
                 for j in 0..3 {
                     for i in 0..3 {
                         out.adj[j][i] = adj[j][i];
-                        out.inv[j][i] = adj[j][i] * r;
                     }
                 }
             }
@@ -397,20 +388,22 @@ impl<const M: usize> SpdSolver<M> {
         Some(out)
     }
 
-    /// `nu^T S^-1 nu` (`M > 3`: `|D^-1/2 L^-1 nu|^2` by forward substitution).
+    /// `nu^T S^-1 nu` (`M <= 3`: `(nu^T adj S nu) / det S`; `M > 3`: `|D^-1/2 L^-1 nu|^2` by
+    /// forward substitution).
     #[inline(always)]
     pub(crate) fn quad_form(&self, nu: &SVector<f64, M>) -> f64 {
         let nu = cols(nu)[0];
         if M <= 3 {
-            let mut nis = 0.0;
+            // (nu^T adj S nu) / det S
+            let mut form = 0.0;
             for j in 0..M {
                 let mut row = 0.0;
                 for i in 0..M {
-                    row += self.inv[j][i] * nu[i];
+                    row += self.adj[j][i] * nu[i];
                 }
-                nis += nu[j] * row;
+                form += nu[j] * row;
             }
-            return nis;
+            return form * self.det_inv;
         }
         let mut y = nu;
         let mut nis = 0.0;
