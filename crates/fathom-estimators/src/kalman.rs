@@ -13,7 +13,7 @@ use fathom_core::{
     Gaussian, Time,
     gaussian::{SYMMETRY_TOLERANCE, check_covariance, symmetrize},
 };
-use nalgebra::{RowSVector, SMatrix, SVector};
+use nalgebra::{Matrix1, RowSVector, SMatrix, SVector};
 
 /// Diagnostics of an applied update: innovation `nu`, its covariance
 /// `S = H P H^T + R` and the NIS `nu^T S^-1 nu`.
@@ -549,7 +549,7 @@ impl<const N: usize> KalmanFilter<N> {
         })
     }
 
-    /// Gain `K = U S^-1` by triangular solves with the factor of `S`, state, Joseph
+    /// Gain `K = U S^-1` ([`linalg::SpdSolver::solve_right`]), state, Joseph
     /// covariance, one validity test (`x` finite, `P` positive definite), commit.
     #[inline(always)]
     fn apply<const M: usize>(
@@ -632,7 +632,7 @@ impl<const N: usize> KalmanFilter<N> {
     {
         simd::dispatch(
             #[inline(always)]
-            |_isa| {
+            |isa| {
                 let t = self.time;
                 let mut x = self.x;
                 let mut p = *self.covariance();
@@ -682,7 +682,9 @@ impl<const N: usize> KalmanFilter<N> {
                     }
                     let k = pht / s;
                     x += k * m.innovation;
-                    p = linalg::joseph_update_scalar(&p, &pht, &k, s);
+                    let mut p_next = p;
+                    linalg::joseph_update(isa, &p, &pht, &k, &Matrix1::new(s), &mut p_next);
+                    p = p_next;
                 }
                 if !(linalg::all_finite(x.as_slice()) && linalg::is_positive_definite(&p)) {
                     return Err(updated_error(&x, &p, t));

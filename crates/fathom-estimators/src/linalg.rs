@@ -11,7 +11,8 @@
 //!
 //! Costs (multiply-adds, `N` states, `M` measurements): prediction `N^3 + N^2 (N + 1)
 //! / 2` (`F P`, then the upper triangle of `(F P) F^T`); innovation `N^2 M + N M^2`;
-//! gain `N M^2` (product with `S^-1`, or two triangular solves for `M > 3`);
+//! gain `N M^2` (product with `adj S`, then `N M` scalings by `1 / det S`; two
+//! triangular solves for `M > 3`);
 //! Joseph update `N M^2 + N (N + 1) M`; positive-definiteness test `N^3 / 6` and `N /
 //! 2` divisions. Matrices are read through their column arrays (`[[f64;
 //! rows]; cols]`, nalgebra's storage); loops over whole columns have compile-time
@@ -511,30 +512,6 @@ pub(crate) fn joseph_update<const N: usize, const M: usize>(
     store_symmetric(&upper, &mut p_new.data.0);
 }
 
-/// Scalar Joseph update (`M = 1`: row `h`, innovation variance `s`, `pht = P h^T`,
-/// gain `k`): [`joseph_update`] with vectors, `O(N^2)`.
-#[inline(always)]
-pub(crate) fn joseph_update_scalar<const N: usize>(
-    p: &SMatrix<f64, N, N>,
-    pht: &SVector<f64, N>,
-    k: &SVector<f64, N>,
-    s: f64,
-) -> SMatrix<f64, N, N> {
-    let (pc, uc, kc) = (cols(p), &cols(pht)[0], &cols(k)[0]);
-    let mut w = *uc;
-    axmy(&mut w, s, kc);
-    let mut out = [[0.0; N]; N];
-    unrolled_for!(j in 0..N, {
-        let (uj, kj) = (uc[j], kc[j]);
-        for i in 0..j + 1 {
-            let v = pc[j][i] - (kc[i] * uj + w[i] * kj);
-            out[j][i] = v;
-            out[i][j] = v;
-        }
-    });
-    matrix(out)
-}
-
 /// Whether the symmetric matrix `a` (lower triangle read) is positive definite, by
 /// block `L D L^T` elimination with `2 x 2` pivot blocks (and a final `1 x 1` pivot
 /// when `N` is odd), no pivoting, early exit, no allocation:
@@ -691,7 +668,7 @@ fn cholesky_succeeds<const M: usize>(a: &Cols<M, M>) -> bool {
 mod tests {
     use super::*;
     use approx::assert_relative_eq;
-    use nalgebra::{Matrix2, Matrix3, RowSVector};
+    use nalgebra::{Matrix1, Matrix2, Matrix3, RowSVector};
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -843,7 +820,7 @@ mod tests {
             let a1 = SMatrix::<f64, 6, 6>::identity() - ks * hr;
             let prod1 = a1 * p * a1.transpose() + ks * ks.transpose() * 0.7;
             let s1 = (hr * phts)[0] + 0.7;
-            let fast1 = joseph_update_scalar(&p, &phts, &ks, s1);
+            let fast1 = joseph(&p, &phts, &ks, &Matrix1::new(s1));
             assert_eq!(fast1, fast1.transpose());
             assert_relative_eq!(fast1, prod1, epsilon = 1e-11);
         }
