@@ -162,8 +162,8 @@ pub(crate) fn all_finite(data: &[f64]) -> bool {
 /// `Q` passes the process-noise test of [`crate::kalman`] (non-negative diagonal,
 /// symmetric within [`SYMMETRY_TOLERANCE`] relative to the largest diagonal entry;
 /// finiteness is not tested here). An exactly symmetric `Q` (the usual case, found
-/// with one comparison per pair) is added as it is, which is the same number: `0.5 (u
-/// + u) = u`; only a `Q` that is not takes the tolerance test and the mean (measured:
+/// with one comparison per pair) is added as it is, which is the same number:
+/// `0.5 (u + u) = u`; only a `Q` that is not takes the tolerance test and the mean (measured:
 /// the 6-state prediction 69 -> 59 ns, the scalar averaged copy was read back as
 /// vectors). With `check_q = false` (a [`crate::ProcessNoise`], checked and exactly
 /// symmetric) the test is skipped.
