@@ -600,7 +600,12 @@ pub(crate) fn is_positive_definite<const N: usize>(a: &SMatrix<f64, N, N>) -> bo
 /// returns the error, or accepts a nearly singular `r` this test declined). No square
 /// root or division for `M <= 3`:
 ///
-/// - `M = 1`: `r > 0`, exactly nalgebra's criterion.
+/// Finiteness: for `M = 2, 3` the diagonal's range test rejects a non-finite diagonal
+/// entry, a non-finite lower entry makes its `2 x 2` minor `-inf` or NaN, and a
+/// non-finite upper entry fails the symmetry test (`inf == inf` passes it, but then
+/// the lower entry is infinite too); `M = 1` and `M >= 4` test it directly.
+///
+/// - `M = 1`: `r > 0` (and finite), exactly nalgebra's criterion.
 /// - `M = 2, 3`: every diagonal entry in `[1e-100, 1e100]` (so products of three are
 ///   normal numbers), every `2 x 2` principal minor `r_ii r_jj - r_ij^2 > tau r_ii
 ///   r_jj` and (`M = 3`) `det r > tau r_00 r_11 r_22`, `tau = 1e-8`. The minors then
@@ -623,26 +628,22 @@ pub(crate) fn is_positive_definite<const N: usize>(a: &SMatrix<f64, N, N>) -> bo
 pub(crate) fn covariance_surely_valid<const M: usize>(r: &SMatrix<f64, M, M>) -> bool {
     const TAU: f64 = 1e-8;
     let rc = cols(r);
-    if !all_finite(r.as_slice()) {
-        return false;
-    }
-    let mut scale = 0.0_f64;
-    for j in 0..M {
-        let d = rc[j][j].abs();
-        scale = if d > scale { d } else { scale };
-    }
-    let threshold = SYMMETRY_TOLERANCE * scale.max(f64::MIN_POSITIVE);
+    // symmetric: exactly (the usual case, one comparison per pair), else within the
+    // tolerance
     let mut ok = true;
     for j in 0..M {
         for i in 0..j {
-            ok &= (rc[j][i] - rc[i][j]).abs() <= threshold;
+            ok &= rc[j][i] == rc[i][j];
         }
+    }
+    if !ok {
+        ok = symmetric_within_tolerance(rc);
     }
     // lower triangle, as the Cholesky factorization reads it: l(i, j) = r[i, j], i >= j
     let l = |i: usize, j: usize| rc[j][i];
     match M {
         0 => ok,
-        1 => ok && l(0, 0) > 0.0,
+        1 => ok && positive_finite(l(0, 0)),
         2 | 3 => {
             for i in 0..M {
                 ok &= (1e-100..=1e100).contains(&l(i, i));
@@ -661,8 +662,29 @@ pub(crate) fn covariance_surely_valid<const M: usize>(r: &SMatrix<f64, M, M>) ->
             }
             ok
         }
-        _ => ok && cholesky_succeeds(rc),
+        _ => ok && all_finite(r.as_slice()) && cholesky_succeeds(rc),
     }
+}
+
+/// Whether `r` is symmetric within [`SYMMETRY_TOLERANCE`] relative to its largest
+/// `|diagonal|` entry (the comparisons of `check_covariance`; a NaN fails), for an `r`
+/// that is not exactly symmetric.
+#[cold]
+#[inline(never)]
+fn symmetric_within_tolerance<const M: usize>(rc: &Cols<M, M>) -> bool {
+    let mut scale = 0.0_f64;
+    for j in 0..M {
+        let d = rc[j][j].abs();
+        scale = if d > scale { d } else { scale };
+    }
+    let threshold = SYMMETRY_TOLERANCE * scale.max(f64::MIN_POSITIVE);
+    let mut ok = true;
+    for j in 0..M {
+        for i in 0..j {
+            ok &= (rc[j][i] - rc[i][j]).abs() <= threshold;
+        }
+    }
+    ok
 }
 
 /// nalgebra's `Cholesky::new` success criterion, operation by operation.
@@ -976,7 +998,15 @@ mod tests {
             match i % 6 {
                 // straddles the symmetry tolerance
                 0 => r[(0, M - 1)] += SYMMETRY_TOLERANCE * scale * rng.random_range(0.9..1.1),
-                1 => r[(M - 1, 0)] = [f64::NAN, f64::INFINITY, -f64::INFINITY][i % 3],
+                // a non-finite lower, upper or symmetric pair of entries
+                1 => {
+                    let v = [f64::NAN, f64::INFINITY, -f64::INFINITY][(i / 6) % 3];
+                    match (i / 18) % 3 {
+                        0 => r[(M - 1, 0)] = v,
+                        1 => r[(0, M - 1)] = v,
+                        _ => (r[(M - 1, 0)], r[(0, M - 1)]) = (v, v),
+                    }
+                }
                 2 => r[(M - 1, M - 1)] = 0.0,
                 // nearly singular: a rank-one-deficient matrix plus a tiny multiple of I
                 3 => {
