@@ -161,11 +161,11 @@ pub(crate) fn all_finite(data: &[f64]) -> bool {
 /// Predicted covariance `F P F^T + (Q + Q^T) / 2`, written to `p_pred`, and whether
 /// `Q` passes the process-noise test of [`crate::kalman`] (non-negative diagonal,
 /// symmetric within [`SYMMETRY_TOLERANCE`] relative to the largest diagonal entry;
-/// finiteness is not tested here). An exactly symmetric `Q` (the usual case, found
-/// with one comparison per pair) is added as it is, which is the same number:
-/// `0.5 (u + u) = u`; only a `Q` that is not takes the tolerance test and the mean (measured:
-/// the 6-state prediction 69 -> 59 ns, the scalar averaged copy was read back as
-/// vectors). With `check_q = false` (a [`crate::ProcessNoise`], checked and exactly
+/// finiteness is not tested here). A bitwise symmetric `Q` (the usual case, found
+/// with one integer comparison per pair) is added as it is, which is the same bits
+/// as its mean: `0.5 (u + u) = u`; only a `Q` that is not takes the tolerance test
+/// and the mean (measured: the 6-state prediction 69 -> 59 ns; the scalar averaged
+/// copy was read back as vectors). With `check_q = false` (a [`crate::ProcessNoise`], checked and exactly
 /// symmetric) the test is skipped.
 ///
 /// `A = F P`, then only the upper triangle of `A F^T` (column `j`, rows `0..=j`:
@@ -185,8 +185,9 @@ pub(crate) fn propagate_covariance<const N: usize>(
 ) -> bool {
     let (fc, qc) = (cols(f), cols(q));
     let a = mul(isa, fc, cols(p));
-    // Q as it is when it is checked already or exactly symmetric (the usual case:
-    // one comparison per pair, no copy); else the upper triangle of (Q + Q^T) / 2
+    // Q as it is when it is checked already or bitwise symmetric (the usual case:
+    // one integer comparison per pair, no copy); else the upper triangle of
+    // (Q + Q^T) / 2
     let mut q_ok = true;
     let mut q_mean = [[0.0; N]; N];
     let mut q_add = qc;
@@ -195,7 +196,7 @@ pub(crate) fn propagate_covariance<const N: usize>(
         for j in 0..N {
             q_ok &= qc[j][j] >= 0.0;
             for i in 0..j {
-                exact &= qc[j][i] == qc[i][j];
+                exact &= qc[j][i].to_bits() == qc[i][j].to_bits();
             }
         }
         if !exact {
@@ -602,8 +603,8 @@ pub(crate) fn is_positive_definite<const N: usize>(a: &SMatrix<f64, N, N>) -> bo
 ///
 /// Finiteness: for `M = 2, 3` the diagonal's range test rejects a non-finite diagonal
 /// entry, a non-finite lower entry makes its `2 x 2` minor `-inf` or NaN, and a
-/// non-finite upper entry fails the symmetry test (`inf == inf` passes it, but then
-/// the lower entry is infinite too); `M = 1` and `M >= 4` test it directly.
+/// non-finite upper entry fails the symmetry test (the same bits pass it, but then
+/// the lower entry is non-finite too); `M = 1` and `M >= 4` test it directly.
 ///
 /// - `M = 1`: `r > 0` (and finite), exactly nalgebra's criterion.
 /// - `M = 2, 3`: every diagonal entry in `[1e-100, 1e100]` (so products of three are
@@ -628,12 +629,12 @@ pub(crate) fn is_positive_definite<const N: usize>(a: &SMatrix<f64, N, N>) -> bo
 pub(crate) fn covariance_surely_valid<const M: usize>(r: &SMatrix<f64, M, M>) -> bool {
     const TAU: f64 = 1e-8;
     let rc = cols(r);
-    // symmetric: exactly (the usual case, one comparison per pair), else within the
-    // tolerance
+    // symmetric: bitwise (the usual case, one integer comparison per pair), else
+    // within the tolerance
     let mut ok = true;
     for j in 0..M {
         for i in 0..j {
-            ok &= rc[j][i] == rc[i][j];
+            ok &= rc[j][i].to_bits() == rc[i][j].to_bits();
         }
     }
     if !ok {
