@@ -162,8 +162,8 @@ fn targets(results: &[BenchResult]) -> String {
         }
     }
     if let (Some(one), Some(two)) = (
-        find(results, "mc_batch8_beacons/threads_1"),
-        find(results, "mc_batch8_beacons/threads_2"),
+        find(results, "mc_batch32_beacons/threads_1"),
+        find(results, "mc_batch32_beacons/threads_2"),
     ) {
         let speedup = one.ns_per_iter / two.ns_per_iter;
         let best = one.min_ns_per_iter / two.min_ns_per_iter;
