@@ -222,28 +222,20 @@ pub(crate) fn propagate_covariance<const N: usize>(
 
 /// The upper triangle of `(Q + Q^T) / 2` into `mean` (the diagonal of `Q` as it is:
 /// `0.5 (d + d) = d`; a `d` so large that `d + d` overflows is not a variance
-/// anyway), and whether `Q` is symmetric within [`SYMMETRY_TOLERANCE`] relative to
-/// its largest diagonal entry (a NaN fails; the diagonal's sign is tested by the
-/// caller). Taken only for a `Q` that is not exactly symmetric.
+/// anyway), and whether `Q` is symmetric within [`SYMMETRY_TOLERANCE`]
+/// ([`symmetric_within_tolerance`]; its scale, the largest `|diagonal|` entry, is
+/// the largest diagonal entry whenever the caller's sign test passes). Taken only
+/// for a `Q` that is not bitwise symmetric.
 #[cold]
 #[inline(never)]
 fn mean_within_tolerance<const N: usize>(qc: &Cols<N, N>, mean: &mut Cols<N, N>) -> bool {
-    let mut scale = f64::MIN_POSITIVE;
     for j in 0..N {
-        let d = qc[j][j];
-        scale = if d > scale { d } else { scale };
-        mean[j][j] = d;
-    }
-    let threshold = SYMMETRY_TOLERANCE * scale;
-    let mut ok = true;
-    for j in 0..N {
+        mean[j][j] = qc[j][j];
         for i in 0..j {
-            let (upper, lower) = (qc[j][i], qc[i][j]);
-            ok &= (upper - lower).abs() <= threshold;
-            mean[j][i] = 0.5 * (upper + lower);
+            mean[j][i] = 0.5 * (qc[j][i] + qc[i][j]);
         }
     }
-    ok
+    symmetric_within_tolerance(qc)
 }
 
 /// Writes the symmetric matrix whose upper triangle is that of `upper` (column `j`,
@@ -667,9 +659,9 @@ pub(crate) fn covariance_surely_valid<const M: usize>(r: &SMatrix<f64, M, M>) ->
     }
 }
 
-/// Whether `r` is symmetric within [`SYMMETRY_TOLERANCE`] relative to its largest
-/// `|diagonal|` entry (the comparisons of `check_covariance`; a NaN fails), for an `r`
-/// that is not exactly symmetric.
+/// Whether `rc` is symmetric within [`SYMMETRY_TOLERANCE`] relative to its largest
+/// `|diagonal|` entry (the comparisons of `check_covariance`; a NaN fails), for a
+/// matrix that is not bitwise symmetric (`R` here, `Q` in [`mean_within_tolerance`]).
 #[cold]
 #[inline(never)]
 fn symmetric_within_tolerance<const M: usize>(rc: &Cols<M, M>) -> bool {
