@@ -165,8 +165,8 @@ pub(crate) fn all_finite(data: &[f64]) -> bool {
 /// with one integer comparison per pair) is added as it is, which is the same bits
 /// as its mean: `0.5 (u + u) = u`; only a `Q` that is not takes the tolerance test
 /// and the mean (measured: the 6-state prediction 69 -> 59 ns; the scalar averaged
-/// copy was read back as vectors). With `check_q = false` (a [`crate::ProcessNoise`], checked and exactly
-/// symmetric) the test is skipped.
+/// copy was read back as vectors). With `check_q = false` (a
+/// [`crate::ProcessNoise`], checked and exactly symmetric) the test is skipped.
 ///
 /// `A = F P`, then only the upper triangle of `A F^T` (column `j`, rows `0..=j`:
 /// `sum_k A[:, k] F[j, k]`), mirrored: the result is exactly symmetric. A non-finite
@@ -189,7 +189,7 @@ pub(crate) fn propagate_covariance<const N: usize>(
     // one integer comparison per pair, no copy); else the upper triangle of
     // (Q + Q^T) / 2
     let mut q_ok = true;
-    let mut q_mean = [[0.0; N]; N];
+    let q_mean: Cols<N, N>;
     let mut q_add = qc;
     if check_q {
         let mut exact = true;
@@ -200,7 +200,9 @@ pub(crate) fn propagate_covariance<const N: usize>(
             }
         }
         if !exact {
-            q_ok &= mean_within_tolerance(qc, &mut q_mean);
+            let symmetric;
+            (q_mean, symmetric) = mean_within_tolerance(qc);
+            q_ok &= symmetric;
             q_add = &q_mean;
         }
     }
@@ -220,22 +222,22 @@ pub(crate) fn propagate_covariance<const N: usize>(
     q_ok
 }
 
-/// The upper triangle of `(Q + Q^T) / 2` into `mean` (the diagonal of `Q` as it is:
-/// `0.5 (d + d) = d`; a `d` so large that `d + d` overflows is not a variance
-/// anyway), and whether `Q` is symmetric within [`SYMMETRY_TOLERANCE`]
+/// `(Q + Q^T) / 2` in the upper triangle (the lower one is left as `Q`'s, the
+/// kernel reads only the upper; the diagonal of `Q` as it is: `0.5 (d + d) = d`; a
+/// `d` so large that `d + d` overflows is not a variance anyway), and whether `Q` is symmetric within [`SYMMETRY_TOLERANCE`]
 /// ([`symmetric_within_tolerance`]; its scale, the largest `|diagonal|` entry, is
 /// the largest diagonal entry whenever the caller's sign test passes). Taken only
 /// for a `Q` that is not bitwise symmetric.
 #[cold]
 #[inline(never)]
-fn mean_within_tolerance<const N: usize>(qc: &Cols<N, N>, mean: &mut Cols<N, N>) -> bool {
+fn mean_within_tolerance<const N: usize>(qc: &Cols<N, N>) -> (Cols<N, N>, bool) {
+    let mut mean = *qc;
     for j in 0..N {
-        mean[j][j] = qc[j][j];
         for i in 0..j {
             mean[j][i] = 0.5 * (qc[j][i] + qc[i][j]);
         }
     }
-    symmetric_within_tolerance(qc)
+    (mean, symmetric_within_tolerance(qc))
 }
 
 /// Writes the symmetric matrix whose upper triangle is that of `upper` (column `j`,
