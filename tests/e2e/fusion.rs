@@ -3,7 +3,9 @@
 //! INS drifts far more than the DVL dead reckoning, and EFF's feedback keeps the INS
 //! integrator's error bounded.
 
-use fathom::sim::experiments::fusion::{FusionScenario, RunResult, run_once, sim::Method};
+use fathom::sim::experiments::fusion::{
+    RunResult, run_once, scenario::FusionScenario, sim::Method,
+};
 use fathom::sim::montecarlo::try_run_monte_carlo;
 use fathom::sim::scenario::parse_toml;
 
@@ -22,7 +24,7 @@ fn reduced_scenario() -> FusionScenario {
 
 fn runs() -> Vec<RunResult> {
     let s = reduced_scenario();
-    let setup = s.check("reduced fusion", None).unwrap();
+    let setup = s.check("reduced fusion").unwrap();
     let mission = setup.mission().unwrap();
     assert_eq!(mission.course_changes().len(), 4);
     try_run_monte_carlo(setup.runs, setup.base_seed, Some(2), |_, rng| {

@@ -98,7 +98,7 @@ fn seed_inputs_are_valid() {
         harness::plaza_text(&td)[2],
         "ranges sort: ok, 4 ranges, 1 order breaks"
     );
-    for preset in 0..harness::PRESETS.len() as u8 {
+    for preset in 0..harness::presets().len() as u8 {
         let outcome = harness::scenario_edit(&[preset]);
         assert!(outcome[0].starts_with("ok"), "{outcome:?}");
     }

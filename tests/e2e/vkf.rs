@@ -3,7 +3,7 @@
 //! rows and claims are present and finite, and results do not depend on the thread
 //! count.
 
-use fathom_sim::experiment::run_paper_to;
+use fathom_sim::driver::run_paper_to;
 use fathom_sim::experiments::registry;
 use fathom_sim::{PaperOptions, output::read_summary_json};
 

@@ -40,18 +40,15 @@ use std::process::ExitCode;
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
-use fathom_sim::data::plaza::{PlazaError, PlazaLog};
+use fathom_sim::experiments::plaza::Plaza;
 use fathom_sim::progress::{Progress, ProgressEvent};
-use fathom_sim::replay::plaza::{PlazaSettings, parse_settings, replay};
-use fathom_sim::replay::plaza_output::{write_outputs, write_standalone};
+use fathom_sim::replay::plaza::parse_settings;
 use fathom_sim::user_run::{
-    RunOptions, check_command, check_scenario, one_line, run_scenario_with_progress,
+    RunOptions, check_command, check_scenario, one_line, run_scenario_text,
+    run_scenario_with_progress,
 };
-use fathom_sim::{SimError, error_chain, experiments::registry};
+use fathom_sim::{Experiment, SimError, error_chain, experiments::registry};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-
-/// The built-in settings (a copy of `scenarios/plaza.toml` at build time).
-const DEFAULT_PLAZA_CONFIG: &str = include_str!("../../../scenarios/plaza.toml");
 
 #[derive(Debug, Parser)]
 #[command(
@@ -134,24 +131,42 @@ enum Failure {
     Run(anyhow::Error),
 }
 
-fn load_settings(config: Option<&Path>) -> Result<(PlazaSettings, String), Failure> {
-    match config {
-        None => {
-            let label = "built-in scenarios/plaza.toml";
-            parse_settings(DEFAULT_PLAZA_CONFIG, label)
-                .map(|s| (s, label.to_string()))
-                .map_err(|e| Failure::Usage(anyhow!(e)))
-        }
+/// The settings text and its label: `--config` or the built-in preset. Checked here,
+/// so that a bad file is a usage error naming its key.
+fn load_settings(config: Option<&Path>) -> Result<(String, String), Failure> {
+    let (text, label) = match config {
+        None => (
+            <Plaza as Experiment>::PRESET.to_string(),
+            "built-in scenarios/plaza.toml".to_string(),
+        ),
         Some(path) => {
             let label = path.display().to_string();
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read settings file `{label}`"))
                 .map_err(Failure::Usage)?;
-            parse_settings(&text, &label)
-                .map(|s| (s, label))
-                .map_err(|e| Failure::Usage(anyhow!(e)))
+            (text, label)
         }
-    }
+    };
+    parse_settings(&text, &label).map_err(|e| Failure::Usage(anyhow!(e)))?;
+    Ok((text, label))
+}
+
+/// `text` with its `[data] dir` replaced by `dir` (made absolute).
+fn with_data_dir(text: &str, dir: &Path) -> Result<String, Failure> {
+    let mut table: toml::Table = toml::from_str(text)
+        .context("settings")
+        .map_err(Failure::Usage)?;
+    let dir = std::path::absolute(dir)
+        .with_context(|| format!("cannot resolve `{}`", dir.display()))
+        .map_err(Failure::Usage)?;
+    let data = table
+        .get_mut("data")
+        .and_then(toml::Value::as_table_mut)
+        .ok_or_else(|| Failure::Usage(anyhow!("settings: missing table `[data]`")))?;
+    data.insert("dir".into(), toml::Value::String(dir.display().to_string()));
+    toml::to_string(&table)
+        .context("settings")
+        .map_err(Failure::Run)
 }
 
 fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
@@ -161,37 +176,60 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
              deterministic (no random draws, no base seed)"
         )));
     }
-    let (settings, label) = load_settings(args.config.as_deref())?;
-    let log = PlazaLog::read_dir(&args.dir, settings.range_order).map_err(|e| {
-        let usage = matches!(e, PlazaError::NoFolder { .. });
-        let e = anyhow!(e).context("cannot read the Plaza data");
-        if usage {
-            Failure::Usage(e)
-        } else {
-            Failure::Run(e)
+    let (text, label) = load_settings(args.config.as_deref())?;
+    if !args.dir.is_dir() {
+        return Err(Failure::Usage(anyhow!(
+            "cannot read the Plaza data: `{}` is not a folder",
+            args.dir.display()
+        )));
+    }
+    let text = with_data_dir(&text, &args.dir)?;
+    let options = RunOptions {
+        scenario: PathBuf::from(&label),
+        out_dir: Some(args.out.clone()),
+        runs: None,
+        threads: None,
+        seed: None,
+        base_dir: std::env::current_dir()
+            .context("cannot read the current directory")
+            .map_err(Failure::Run)?,
+    };
+    let (result, _) =
+        run_scenario_text(&text, &label, &options, &registry(), None).map_err(|e| {
+            let usage = matches!(e, SimError::InvalidArgument { .. });
+            let e = anyhow!(one_line(&error_chain(&e))).context("replay failed");
+            if usage {
+                Failure::Usage(e)
+            } else {
+                Failure::Run(e)
+            }
+        })?;
+    let s = &result.summary;
+    let value = |m: &str, k: &str| s.row(m, k).map_or(f64::NAN, |r| r.value);
+    let mut methods: Vec<&str> = Vec::new();
+    for r in &s.rows {
+        if r.metric == "mean" && !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
         }
-    })?;
-    let result =
-        replay(&log, &settings).map_err(|e| Failure::Run(anyhow!(e).context("replay failed")))?;
-    let outputs = write_outputs(&result, &args.out)
-        .and_then(|o| write_standalone(&o, &args.out, &args.dir, &label).map(|()| o))
-        .map_err(|e| Failure::Run(anyhow!(e).context("cannot write the outputs")))?;
-    let mut text = format!(
-        "{}: {} odometry rows, {} ranges, {} ground-truth rows; settings: {label}\n\n",
-        result.data_name, result.rows.0, result.rows.1, result.rows.2
-    );
+    }
+    let mut text = format!("settings: {label}; data: {}\n\n", args.dir.display());
     text.push_str(&format!(
         "{:<22} {:>9} {:>9} {:>9} {:>9} {:>9}\n",
         "method", "mean [m]", "std [m]", "max [m]", "rmse [m]", "rejected"
     ));
-    for m in &result.methods {
+    for m in methods {
         text.push_str(&format!(
             "{:<22} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
-            m.name, m.stats.mean, m.stats.std, m.stats.max, m.stats.rmse, m.rejected
+            m,
+            value(m, "mean"),
+            value(m, "std"),
+            value(m, "max"),
+            value(m, "rmse"),
+            value(m, "rejected")
         ));
     }
     text.push('\n');
-    for c in &outputs.summary.claims {
+    for c in &s.claims {
         text.push_str(&format!(
             "[{}] {}: {}\n",
             if c.holds { "holds" } else { "does not hold" },
@@ -329,8 +367,11 @@ fn list_cmd() -> String {
     let mut text = String::from("experiments (fathom run <scenario>; presets in scenarios/):\n");
     for e in registry() {
         text.push_str(&format!(
-            "  {:<8} seed {:<40} scenario {}\n",
-            e.name, e.seed_doc, e.default_scenario
+            "  {:<8} {} (seed {}; preset {})\n",
+            e.name(),
+            e.about(),
+            e.seed_doc(),
+            e.default_scenario()
         ));
     }
     text.push_str("estimators:\n");
@@ -557,7 +598,7 @@ mod tests {
         let bad = dir.join("bad.toml");
         std::fs::write(
             &bad,
-            DEFAULT_PLAZA_CONFIG.replace("sigma_m = 1.0", "sigma_m = -1.0"),
+            <Plaza as Experiment>::PRESET.replace("sigma_m = 1.0", "sigma_m = -1.0"),
         )
         .unwrap();
         match load_settings(Some(&bad)) {

@@ -45,6 +45,7 @@
 //! - [`experiments`]: the registered paper experiments.
 
 pub mod data;
+pub mod driver;
 pub mod error;
 pub mod experiment;
 pub mod experiments;
@@ -58,8 +59,6 @@ pub mod scenario;
 mod scenario_docs;
 pub mod user_run;
 
+pub use driver::{PaperOptions, PaperResult, error_chain, run_paper};
 pub use error::SimError;
-pub use experiment::{
-    Experiment, ExperimentContext, ExperimentOutput, PaperOptions, PaperResult, error_chain,
-    run_paper,
-};
+pub use experiment::{DynExperiment, Experiment};

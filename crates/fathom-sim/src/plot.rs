@@ -149,12 +149,12 @@ fn min_max(vals: impl Iterator<Item = f64>) -> (f64, f64) {
     })
 }
 
-/// Render into memory with `draw`, then write the SVG file.
+/// Render into memory with `draw`; `path` labels errors.
 fn render(
     path: &Path,
     size: (u32, u32),
     draw: impl FnOnce(&Area<'_>) -> Result<(), String>,
-) -> Result<(), SimError> {
+) -> Result<String, SimError> {
     check_size(path, size)?;
     let mut buf = String::new();
     {
@@ -163,8 +163,41 @@ fn render(
         draw(&root).map_err(|e| plot_err(path, e))?;
         root.present().map_err(|e| plot_err(path, de(e)))?;
     }
-    write_text(path, &buf)
+    Ok(buf)
 }
+
+/// A figure that renders itself as SVG text.
+pub trait Figure {
+    /// The SVG text; `label` names the figure in error messages (its file name).
+    ///
+    /// # Errors
+    /// [`SimError::Plot`] on empty / non-finite data or a drawing failure.
+    fn to_svg(&self, label: &Path) -> Result<String, SimError>;
+
+    /// Renders and writes the SVG file `path` (parent directories are created).
+    ///
+    /// # Errors
+    /// As [`Figure::to_svg`], then [`SimError::Io`].
+    fn write_svg(&self, path: impl AsRef<Path>) -> Result<(), SimError>
+    where
+        Self: Sized,
+    {
+        let path = path.as_ref();
+        write_text(path, &self.to_svg(path)?)
+    }
+}
+
+macro_rules! impl_figure {
+    ($($ty:ty),*) => {
+        $(impl Figure for $ty {
+            fn to_svg(&self, label: &Path) -> Result<String, SimError> {
+                self.render_svg(label)
+            }
+        })*
+    };
+}
+
+impl_figure!(LinePlot, PlanPlot, Histogram, HeatMap, Timeline);
 
 fn title_style(size: u32) -> TextStyle<'static> {
     (FONT, size).into_font().into()
@@ -240,8 +273,7 @@ impl LinePlot {
     ///
     /// # Errors
     /// [`SimError::Plot`] on empty / non-finite data, [`SimError::Io`] on write failure.
-    pub fn write_svg(&self, path: impl AsRef<Path>) -> Result<(), SimError> {
-        let path = path.as_ref();
+    fn render_svg(&self, path: &Path) -> Result<String, SimError> {
         check_series(path, "series", &self.series)?;
         for (i, &(a, b)) in self.shaded_x.iter().enumerate() {
             check_finite(path, &format!("shaded interval {i} start"), a)?;
@@ -394,8 +426,7 @@ impl PlanPlot {
     /// # Errors
     /// [`SimError::Plot`] if there is nothing to draw or data are empty / non-finite,
     /// [`SimError::Io`] on write failure.
-    pub fn write_svg(&self, path: impl AsRef<Path>) -> Result<(), SimError> {
-        let path = path.as_ref();
+    fn render_svg(&self, path: &Path) -> Result<String, SimError> {
         if self.paths.is_empty() && self.markers.is_empty() {
             return Err(plot_err(path, "no paths or markers to draw"));
         }
@@ -512,8 +543,7 @@ impl Histogram {
     /// # Errors
     /// [`SimError::Plot`] on no bins, edge/count size mismatch, non-increasing edges,
     /// non-finite or negative counts; [`SimError::Io`] on write failure.
-    pub fn write_svg(&self, path: impl AsRef<Path>) -> Result<(), SimError> {
-        let path = path.as_ref();
+    fn render_svg(&self, path: &Path) -> Result<String, SimError> {
         if self.counts.is_empty() {
             return Err(plot_err(path, "histogram has no bins"));
         }
@@ -644,8 +674,7 @@ impl HeatMap {
     /// # Errors
     /// [`SimError::Plot`] on an empty or ragged matrix, label count mismatch or
     /// non-finite values; [`SimError::Io`] on write failure.
-    pub fn write_svg(&self, path: impl AsRef<Path>) -> Result<(), SimError> {
-        let path = path.as_ref();
+    fn render_svg(&self, path: &Path) -> Result<String, SimError> {
         let nr = self.values.len();
         if nr == 0 || self.values[0].is_empty() {
             return Err(plot_err(path, "heat map matrix is empty"));
@@ -822,8 +851,7 @@ impl Timeline {
     /// # Errors
     /// [`SimError::Plot`] on no rows, non-finite times or a bad window (or no samples
     /// at all when no window is given); [`SimError::Io`] on write failure.
-    pub fn write_svg(&self, path: impl AsRef<Path>) -> Result<(), SimError> {
-        let path = path.as_ref();
+    fn render_svg(&self, path: &Path) -> Result<String, SimError> {
         if self.rows.is_empty() {
             return Err(plot_err(path, "timeline has no rows"));
         }

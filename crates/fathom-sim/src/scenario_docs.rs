@@ -522,8 +522,8 @@ mod tests {
         registry()
             .iter()
             .map(|e| Preset {
-                experiment: e.name.to_string(),
-                text: std::fs::read_to_string(root().join(e.default_scenario)).unwrap(),
+                experiment: e.name().to_string(),
+                text: std::fs::read_to_string(root().join(e.default_scenario())).unwrap(),
                 resolve: &real_resolve,
             })
             .collect()
@@ -546,7 +546,7 @@ mod tests {
         );
         // Every registered experiment has a section, and nothing else does.
         let sections = parse_doc(&doc()).unwrap();
-        let names: BTreeSet<String> = registry().iter().map(|e| e.name.to_string()).collect();
+        let names: BTreeSet<String> = registry().iter().map(|e| e.name().to_string()).collect();
         assert_eq!(sections.keys().cloned().collect::<BTreeSet<_>>(), names);
     }
 

@@ -55,6 +55,7 @@ pub mod histogram;
 pub mod monte_carlo;
 pub mod quantile;
 pub mod run_stats;
+pub mod sample;
 
 pub use consistency::{ChiSquareBounds, nees, nis};
 pub use covariance::{
@@ -70,3 +71,4 @@ pub use histogram::Histogram;
 pub use monte_carlo::{AggregateRow, Aggregator, MeanCi, MeanInterval, mean_ci, mean_interval};
 pub use quantile::{chi2_cdf, chi2_quantile, normal_quantile, student_t_quantile};
 pub use run_stats::RunStats;
+pub use sample::{Quartiles, median, paired_mean_ci, quantile, rms};

@@ -44,6 +44,13 @@ pub struct MeanCi {
     pub std: f64,
 }
 
+impl MeanCi {
+    /// The 95 % interval, or `[mean, mean]` for a single run (no spread estimate).
+    pub fn bounds(&self) -> [f64; 2] {
+        self.ci95.unwrap_or([self.mean, self.mean])
+    }
+}
+
 /// Mean over runs with a Student-t confidence interval at `level` (e.g. 0.95).
 ///
 /// # Errors

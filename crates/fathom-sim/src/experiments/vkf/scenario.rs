@@ -254,6 +254,8 @@ pub struct EskfToml {
     pub sigma0_att_rad: f64,
 }
 
+crate::monte_carlo_scenario!(VkfScenario);
+
 /// The checked scenario.
 #[derive(Debug, Clone)]
 pub struct Checked {
@@ -285,6 +287,8 @@ pub struct Checked {
     pub gate: GateThreshold,
     pub gate_probability: f64,
     pub eskf_sigma0_att: f64,
+    /// The scenario as written (for the report's description of the setup).
+    pub scenario: VkfScenario,
 }
 
 /// An integer ratio `a / b` (both rates in Hz), or an error naming `key`.
@@ -307,9 +311,8 @@ impl VkfScenario {
     ///
     /// # Errors
     /// [`SimError::Invalid`] naming the key.
-    pub fn check(&self, file: &str, runs_override: Option<usize>) -> Result<Checked, SimError> {
-        crate::scenario::require_experiment(file, &self.experiment, "vkf")?;
-        let runs = runs_override.unwrap_or(self.runs);
+    pub fn check(&self, file: &str) -> Result<Checked, SimError> {
+        let runs = self.runs;
         if runs < 2 {
             return Err(SimError::invalid(
                 file,
@@ -317,17 +320,16 @@ impl VkfScenario {
                 format!("needs at least 2 runs for a confidence interval, got {runs}"),
             ));
         }
-        let literal_bias_runs = match (runs_override, self.literal_bias_runs) {
-            (_, 0) => 0,
-            (Some(r), n) => n.min(r).max(2),
-            (None, 1) => {
+        let literal_bias_runs = match self.literal_bias_runs {
+            0 => 0,
+            1 => {
                 return Err(SimError::invalid(
                     file,
                     "literal_bias_runs",
                     "needs 0 (skip) or at least 2 runs",
                 ));
             }
-            (None, n) => n,
+            n => n.min(runs),
         };
         let r = &self.route;
         require_in_range(file, "route.lat_deg", r.lat_deg, -85.0, 85.0)?;
@@ -534,17 +536,9 @@ impl VkfScenario {
             gate,
             gate_probability: n.gate_probability,
             eskf_sigma0_att,
+            scenario: self.clone(),
         })
     }
-}
-
-/// Parses and checks a `vkf` scenario text without running it (`fathom check`);
-/// returns the resolved scenario re-serialized as TOML.
-///
-/// # Errors
-/// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
-pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
-    crate::scenario::resolve_scenario_text(text, file, |s: &VkfScenario, f| s.check(f, None))
 }
 
 #[cfg(test)]
@@ -564,7 +558,7 @@ mod tests {
 
     #[test]
     fn preset_parses_and_checks() {
-        let c = parse(&text()).unwrap().check("vkf.toml", None).unwrap();
+        let c = parse(&text()).unwrap().check("vkf.toml").unwrap();
         assert!(c.runs >= 50);
         assert_eq!(c.n_steps, 162_000);
         assert_eq!(c.sensor_every, 20);
@@ -573,7 +567,9 @@ mod tests {
         // 0.1 deg/hr class, converted once.
         assert!((c.imu.gyro_bias - 0.1f64.to_radians() / 3600.0).abs() < 1e-15);
         // --runs caps the literal configuration.
-        let c = parse(&text()).unwrap().check("vkf.toml", Some(3)).unwrap();
+        let mut s = parse(&text()).unwrap();
+        s.runs = 3;
+        let c = s.check("vkf.toml").unwrap();
         assert_eq!((c.runs, c.literal_bias_runs), (3, 3));
     }
 
@@ -609,7 +605,7 @@ mod tests {
             assert_ne!(t, text(), "{from}");
             let err = parse(&t)
                 .unwrap()
-                .check("vkf.toml", None)
+                .check("vkf.toml")
                 .unwrap_err()
                 .to_string();
             assert!(err.contains(key), "{key}: {err}");

@@ -1,0 +1,442 @@
+//! The `fusion` scenario file: schema, check, and the checked setup.
+
+use fathom_core::units::{deg_to_rad, knots_to_mps};
+use fathom_sensors::integrated::{DvlDrParams, InsParams};
+use fathom_traj::{
+    CheckedFusionMissionParams, FusionMission, FusionMissionParams, generate_fusion_mission,
+};
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+
+use super::sim::{FilterTuning, RunConfig};
+use crate::SimError;
+use crate::scenario::{require_non_negative, require_positive};
+
+/// The `fusion` scenario file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FusionScenario {
+    /// The experiment this scenario is for: must be `"fusion"` (lets `fathom run`
+    /// pick the experiment from the file).
+    pub experiment: String,
+    /// Monte Carlo runs (noise realizations of the one mission).
+    pub runs: usize,
+    /// Base seed; run `i` uses ChaCha stream `i`.
+    pub base_seed: u64,
+    /// Seed of the mission's knot perturbations (fixed across runs). The generated
+    /// mission must pass its self-checks (speeds, depth, course changes); that is
+    /// only checked when running, not by `fathom check`.
+    pub trajectory_seed: u64,
+    /// The mission.
+    pub mission: MissionToml,
+    /// The INS.
+    pub ins: InsToml,
+    /// The DVL.
+    pub dvl: DvlToml,
+    /// Filter tuning.
+    pub filters: FiltersToml,
+    /// Analysis settings.
+    pub analysis: AnalysisToml,
+    /// Sensitivity sweep.
+    pub sensitivity: SensitivityToml,
+}
+
+/// `[mission]`: the cubic-spline UUV mission (paper §4.1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MissionToml {
+    /// Mission length, s.
+    pub duration_s: f64,
+    /// Sensor and filter step, s (paper: T = 1).
+    pub step_s: f64,
+    /// Course changes during the search (paper: 10; knots = 2 n + 5).
+    pub n_course_changes: usize,
+    /// Search depth, m.
+    pub search_depth_m: f64,
+    /// Allowed depth deviation during the search, m.
+    pub depth_tolerance_m: f64,
+    /// Slowest allowed speed during the search, kt.
+    pub min_speed_kt: f64,
+    /// Fastest allowed speed during the search, kt.
+    pub max_speed_kt: f64,
+    /// Nominal leg speeds, kt (`n_course_changes + 1` values).
+    pub leg_speeds_kt: Vec<f64>,
+    /// Eastward offset of each U-turn, m.
+    pub turn_width_m: f64,
+    /// Std of the random horizontal knot offsets, m.
+    pub perturbation_sigma_m: f64,
+    /// Smallest heading change counted as a course change, deg.
+    pub min_course_change_deg: f64,
+}
+
+/// `[ins]`: accelerometer errors of the INS integrator.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InsToml {
+    /// Per-axis constant bias std, m/s^2.
+    pub accel_bias_sigma_mps2: f64,
+    /// Per-axis white noise std per sample, m/s^2.
+    pub accel_noise_sigma_mps2: f64,
+}
+
+/// `[dvl]`: velocity errors of the DVL dead reckoning.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DvlToml {
+    /// Half width `h` of the per-axis scale-factor error `U(-h, h)`, drawn per run; a
+    /// fraction (0.002 = 0.2 %).
+    pub scale_half_width: f64,
+    /// Per-axis white velocity noise std, m/s.
+    pub vel_noise_sigma_mps: f64,
+}
+
+/// `[filters]`: paper tuning `Q = w^2 I6`, `R = v^2 I3`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FiltersToml {
+    /// INS track process noise scale, m.
+    pub w_ins_m: f64,
+    /// DVL track process noise scale, m.
+    pub w_dvl_m: f64,
+    /// INS position measurement std, m.
+    pub v_ins_m: f64,
+    /// DVL position measurement std, m.
+    pub v_dvl_m: f64,
+    /// MF process noise scale, m.
+    pub w_mf_m: f64,
+    /// Initial position std of every filter, m.
+    pub initial_sigma_pos_m: f64,
+    /// Initial velocity std of every filter, m/s.
+    pub initial_sigma_vel_mps: f64,
+}
+
+/// `[analysis]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AnalysisToml {
+    /// Half width of the window around each course change, s (spec: 7).
+    pub turn_half_window_s: f64,
+    /// A method "spikes" at turns when its turn ratio exceeds this; EFF is robust
+    /// when its ratio is at most this (spec: 1.1).
+    pub turn_ratio_limit: f64,
+    /// Centre of the zoom window of the path figures, s (paper: 440).
+    pub zoom_center_s: f64,
+    /// Half width of the zoom window, s (paper: 7).
+    pub zoom_half_width_s: f64,
+    /// Bins of the error histograms.
+    pub histogram_bins: usize,
+    /// Smallest improvement, relative to the competitor's value, that makes "X beats
+    /// Y" hold: the paired 95 % CI of `X - Y` must lie below `-min * Y` (the paper
+    /// claims 25..60 % improvements, not differences of micrometres).
+    pub min_relative_improvement: f64,
+}
+
+/// `[sensitivity]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SensitivityToml {
+    /// Monte Carlo runs per sweep value (with `--runs N`: `ceil(N / 4)`, at least 2,
+    /// at most this).
+    pub runs: usize,
+    /// DVL velocity noise values, m/s (filters keep their tuning).
+    pub dvl_vel_noise_mps: Vec<f64>,
+    /// Filters' `v_DVL` values, m (sensors keep their defaults).
+    pub filter_v_dvl_m: Vec<f64>,
+}
+
+crate::monte_carlo_scenario!(FusionScenario);
+
+/// The checked scenario.
+#[derive(Debug, Clone)]
+pub struct FusionSetup {
+    /// Monte Carlo runs.
+    pub runs: usize,
+    /// Base seed.
+    pub base_seed: u64,
+    /// Trajectory seed.
+    pub trajectory_seed: u64,
+    /// Mission parameters.
+    pub mission: CheckedFusionMissionParams,
+    /// Per-run configuration.
+    pub run: RunConfig,
+    /// Unchecked INS parameters (for the report).
+    pub ins_params: InsParams,
+    /// Unchecked DVL parameters (the sweep varies them).
+    pub dvl_params: DvlDrParams,
+    /// Course-change window half width, s.
+    pub turn_half_window: f64,
+    /// Turn-ratio limit.
+    pub turn_ratio_limit: f64,
+    /// Zoom window `(centre, half width)`, s.
+    pub zoom: (f64, f64),
+    /// Histogram bins.
+    pub histogram_bins: usize,
+    /// Smallest relative improvement for a "beats" claim.
+    pub min_relative_improvement: f64,
+    /// Runs per sensitivity value.
+    pub sensitivity_runs: usize,
+    /// DVL noise sweep, m/s.
+    pub sweep_dvl_noise: Vec<f64>,
+    /// `v_DVL` sweep, m.
+    pub sweep_v_dvl: Vec<f64>,
+}
+
+fn sweep(file: &str, key: &str, values: &[f64]) -> Result<Vec<f64>, SimError> {
+    if values.len() < 2 {
+        return Err(SimError::invalid(
+            file,
+            key,
+            format!("needs at least 2 values, got {}", values.len()),
+        ));
+    }
+    for (i, &v) in values.iter().enumerate() {
+        require_positive(file, &format!("{key}[{i}]"), v)?;
+        if i > 0 && v <= values[i - 1] {
+            return Err(SimError::invalid(
+                file,
+                format!("{key}[{i}]"),
+                format!("values must increase, {v} follows {}", values[i - 1]),
+            ));
+        }
+    }
+    Ok(values.to_vec())
+}
+
+impl FusionScenario {
+    /// Checks every value and converts the scenario into checked parameters.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the file and key.
+    pub fn check(&self, file: &str) -> Result<FusionSetup, SimError> {
+        let runs = self.runs;
+        if runs < 2 {
+            return Err(SimError::invalid(
+                file,
+                "runs",
+                format!("needs at least 2 Monte Carlo runs for a confidence interval, got {runs}"),
+            ));
+        }
+        let m = &self.mission;
+        require_positive(file, "mission.duration_s", m.duration_s)?;
+        require_positive(file, "mission.step_s", m.step_s)?;
+        let n_steps_f = (m.duration_s / m.step_s).round();
+        if (n_steps_f * m.step_s - m.duration_s).abs() > 1e-9 * m.duration_s || n_steps_f < 10.0 {
+            return Err(SimError::invalid(
+                file,
+                "mission.step_s",
+                format!(
+                    "must divide mission.duration_s ({} s) into at least 10 steps",
+                    m.duration_s
+                ),
+            ));
+        }
+        require_positive(file, "mission.search_depth_m", m.search_depth_m)?;
+        require_positive(file, "mission.depth_tolerance_m", m.depth_tolerance_m)?;
+        require_positive(file, "mission.min_speed_kt", m.min_speed_kt)?;
+        require_positive(file, "mission.max_speed_kt", m.max_speed_kt)?;
+        require_positive(file, "mission.turn_width_m", m.turn_width_m)?;
+        require_non_negative(file, "mission.perturbation_sigma_m", m.perturbation_sigma_m)?;
+        require_positive(
+            file,
+            "mission.min_course_change_deg",
+            m.min_course_change_deg,
+        )?;
+        for (i, v) in m.leg_speeds_kt.iter().enumerate() {
+            require_positive(file, &format!("mission.leg_speeds_kt[{i}]"), *v)?;
+        }
+        let mission = FusionMissionParams {
+            duration: m.duration_s,
+            // Saturating: a count too large for the pattern is refused by `check`.
+            n_knots: m.n_course_changes.saturating_mul(2).saturating_add(5),
+            n_course_changes: m.n_course_changes,
+            search_depth: m.search_depth_m,
+            depth_tolerance: m.depth_tolerance_m,
+            min_speed: knots_to_mps(m.min_speed_kt),
+            max_speed: knots_to_mps(m.max_speed_kt),
+            leg_speeds: m.leg_speeds_kt.iter().map(|&v| knots_to_mps(v)).collect(),
+            turn_width: m.turn_width_m,
+            perturbation_sigma: m.perturbation_sigma_m,
+            min_course_change: deg_to_rad(m.min_course_change_deg),
+            check_dt: m.step_s,
+        }
+        .check()
+        .map_err(|e| SimError::invalid(file, "mission", e.to_string()))?;
+
+        let ins = InsParams {
+            accel_bias_sigma: self.ins.accel_bias_sigma_mps2,
+            accel_noise_sigma: self.ins.accel_noise_sigma_mps2,
+        };
+        require_non_negative(file, "ins.accel_bias_sigma_mps2", ins.accel_bias_sigma)?;
+        require_non_negative(file, "ins.accel_noise_sigma_mps2", ins.accel_noise_sigma)?;
+        let ins_params = ins;
+        let ins = ins
+            .check()
+            .map_err(|e| SimError::invalid(file, "ins", e.to_string()))?;
+        let dvl_params = DvlDrParams {
+            scale_half_width: self.dvl.scale_half_width,
+            vel_noise_sigma: self.dvl.vel_noise_sigma_mps,
+        };
+        require_non_negative(file, "dvl.scale_half_width", dvl_params.scale_half_width)?;
+        require_non_negative(file, "dvl.vel_noise_sigma_mps", dvl_params.vel_noise_sigma)?;
+        let dvl = dvl_params
+            .check()
+            .map_err(|e| SimError::invalid(file, "dvl", e.to_string()))?;
+
+        let f = &self.filters;
+        let tuning = FilterTuning {
+            w_ins: require_non_negative(file, "filters.w_ins_m", f.w_ins_m)?,
+            w_dvl: require_non_negative(file, "filters.w_dvl_m", f.w_dvl_m)?,
+            v_ins: require_positive(file, "filters.v_ins_m", f.v_ins_m)?,
+            v_dvl: require_positive(file, "filters.v_dvl_m", f.v_dvl_m)?,
+            w_mf: require_non_negative(file, "filters.w_mf_m", f.w_mf_m)?,
+            p0_pos: require_positive(file, "filters.initial_sigma_pos_m", f.initial_sigma_pos_m)?,
+            p0_vel: require_positive(
+                file,
+                "filters.initial_sigma_vel_mps",
+                f.initial_sigma_vel_mps,
+            )?,
+        };
+        let a = &self.analysis;
+        require_positive(file, "analysis.turn_half_window_s", a.turn_half_window_s)?;
+        require_positive(file, "analysis.turn_ratio_limit", a.turn_ratio_limit)?;
+        require_non_negative(file, "analysis.zoom_center_s", a.zoom_center_s)?;
+        require_positive(file, "analysis.zoom_half_width_s", a.zoom_half_width_s)?;
+        if a.zoom_center_s > m.duration_s {
+            return Err(SimError::invalid(
+                file,
+                "analysis.zoom_center_s",
+                format!("must lie within the mission (0..{} s)", m.duration_s),
+            ));
+        }
+        if a.histogram_bins < 2 {
+            return Err(SimError::invalid(
+                file,
+                "analysis.histogram_bins",
+                "needs at least 2 bins",
+            ));
+        }
+        let s = &self.sensitivity;
+        if s.runs < 2 {
+            return Err(SimError::invalid(
+                file,
+                "sensitivity.runs",
+                format!("needs at least 2 runs, got {}", s.runs),
+            ));
+        }
+        Ok(FusionSetup {
+            runs,
+            base_seed: self.base_seed,
+            trajectory_seed: self.trajectory_seed,
+            mission,
+            run: RunConfig {
+                step: m.step_s,
+                n_steps: n_steps_f as usize,
+                ins,
+                dvl,
+                tuning,
+            },
+            ins_params,
+            dvl_params,
+            turn_half_window: a.turn_half_window_s,
+            turn_ratio_limit: a.turn_ratio_limit,
+            zoom: (a.zoom_center_s, a.zoom_half_width_s),
+            histogram_bins: a.histogram_bins,
+            min_relative_improvement: require_non_negative(
+                file,
+                "analysis.min_relative_improvement",
+                a.min_relative_improvement,
+            )?,
+            // A quarter of the main batch, at most the scenario's `sensitivity.runs`.
+            sensitivity_runs: runs.div_ceil(4).clamp(2, s.runs),
+            sweep_dvl_noise: sweep(file, "sensitivity.dvl_vel_noise_mps", &s.dvl_vel_noise_mps)?,
+            sweep_v_dvl: sweep(file, "sensitivity.filter_v_dvl_m", &s.filter_v_dvl_m)?,
+        })
+    }
+}
+
+impl FusionSetup {
+    /// The mission (generated from the trajectory seed).
+    ///
+    /// # Errors
+    /// [`SimError::Model`] when the perturbed mission fails its own checks.
+    pub fn mission(&self) -> Result<FusionMission, SimError> {
+        generate_fusion_mission(
+            &self.mission,
+            &mut ChaCha8Rng::seed_from_u64(self.trajectory_seed),
+        )
+        .map_err(|e| SimError::model("fusion mission (trajectory_seed)", e))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiments::fusion::analysis::run_once;
+    use crate::experiments::fusion::sim::Method;
+
+    fn scenario_text() -> String {
+        std::fs::read_to_string(
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/fusion.toml"),
+        )
+        .unwrap()
+    }
+
+    fn parse(text: &str) -> FusionScenario {
+        crate::scenario::parse_toml(text, "fusion.toml").unwrap()
+    }
+
+    #[test]
+    fn preset_parses_and_checks() {
+        let s = parse(&scenario_text());
+        let c = s.check("fusion.toml").unwrap();
+        assert!(c.runs >= 200);
+        assert_eq!(c.run.n_steps, 1000);
+        assert!(c.sweep_dvl_noise.len() >= 5 && c.sweep_v_dvl.len() >= 5);
+        let m = c.mission().unwrap();
+        assert_eq!(m.course_changes().len(), 10);
+        assert!(m.course_changes().iter().any(|t| (t - 440.0).abs() <= 7.0));
+    }
+
+    #[test]
+    fn bad_values_name_the_key() {
+        let text = scenario_text().replace("v_dvl_m = 0.02", "v_dvl_m = -0.02");
+        let err = parse(&text).check("fusion.toml").unwrap_err().to_string();
+        assert!(err.contains("filters.v_dvl_m"), "{err}");
+        let text = scenario_text().replace("step_s = 1.0", "step_s = 0.3");
+        let err = parse(&text).check("fusion.toml").unwrap_err().to_string();
+        assert!(err.contains("mission.step_s"), "{err}");
+        let text = scenario_text().replace("runs = 20\n", "runs = 1\n");
+        let err = parse(&text).check("fusion.toml").unwrap_err().to_string();
+        assert!(err.contains("sensitivity.runs"), "{err}");
+        let text =
+            scenario_text().replace("turn_width_m = 40.0", "turn_width_m = 40.0\nturn_widht = 1");
+        let err = crate::scenario::parse_toml::<FusionScenario>(&text, "fusion.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("turn_widht"), "{err}");
+    }
+
+    #[test]
+    fn short_run_is_finite_and_paired() {
+        let s = parse(&scenario_text());
+        let mut s = s;
+        s.runs = 2;
+        let mut setup = s.check("fusion.toml").unwrap();
+        setup.run.n_steps = 300;
+        let mission = setup.mission().unwrap();
+        let mut rng = crate::montecarlo::run_rng(3, 0);
+        let r = run_once(&setup, &setup.run, &mission, &Method::ALL, true, &mut rng).unwrap();
+        for m in Method::ALL {
+            let mm = r.metrics[m.index()].unwrap();
+            assert!(
+                mm.mean_3d.is_finite() && mm.turn_ratio_3d.is_finite(),
+                "{m:?}"
+            );
+        }
+        // The same stream gives the same numbers.
+        let mut rng = crate::montecarlo::run_rng(3, 0);
+        let again = run_once(&setup, &setup.run, &mission, &Method::ALL, false, &mut rng).unwrap();
+        assert_eq!(r.metrics, again.metrics);
+    }
+}

@@ -1,0 +1,407 @@
+//! The Plaza replay settings: the `plaza.toml` schema, its check into
+//! [`PlazaSettings`], and the filter variants the settings ask for.
+
+use fathom_estimators::{schemes::UpdateScheme, wheel_odometry::WheelOdometryParams};
+use serde::{Deserialize, Serialize};
+
+use crate::SimError;
+use crate::data::plaza::RangeOrder;
+use crate::scenario::{require_non_negative, require_positive};
+
+/// The `plaza.toml` settings file.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PlazaToml {
+    /// The experiment this scenario is for: must be `"plaza"` (lets `fathom run`
+    /// pick the experiment from the file).
+    pub experiment: String,
+    /// Where the data is and how to read it.
+    pub data: DataToml,
+    /// Initial pose uncertainty.
+    pub initial: InitialToml,
+    /// Odometry noise.
+    pub odometry: OdometryToml,
+    /// Range noise and calibration.
+    pub ranges: RangesToml,
+    /// Outlier handling.
+    pub robust: RobustToml,
+    /// Update schemes.
+    pub schemes: SchemesToml,
+    /// Ablation runs.
+    pub ablation: AblationToml,
+}
+
+/// `[data]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DataToml {
+    /// Data folder for `cargo xtask paper` and `fathom run`: an absolute path, or a
+    /// relative one looked up inside the workspace root (for `fathom run` the current
+    /// directory), then beside each of its ancestors, nearest first. `fathom replay plaza
+    /// <dir>` ignores it.
+    pub dir: String,
+    /// `"sort"` or `"strict"` ([`RangeOrder`]).
+    pub range_order: String,
+}
+
+/// `[initial]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct InitialToml {
+    /// Initial position sigma per axis, m.
+    pub position_sigma_m: f64,
+    /// Initial heading sigma, rad.
+    pub heading_sigma_rad: f64,
+}
+
+/// `[odometry]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OdometryToml {
+    /// Distance error, m/sqrt(m).
+    pub distance_sigma_per_sqrt_m: f64,
+    /// Heading error per distance, rad/sqrt(m).
+    pub heading_sigma_per_sqrt_m: f64,
+    /// Heading error per angle turned, rad/sqrt(rad).
+    pub heading_sigma_per_sqrt_rad: f64,
+}
+
+/// `[ranges]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RangesToml {
+    /// White range noise sigma, m.
+    pub sigma_m: f64,
+    /// Common-mode correlation sigma between beacons, m: SC's off-diagonal R, and
+    /// added to every range's variance (`sigma_m^2 + correlation_sigma_m^2`) in all
+    /// schemes.
+    pub correlation_sigma_m: f64,
+    /// `"none"`, `"offset"` or `"affine"` ([`Calibration`]).
+    pub calibration: String,
+    /// Prior sigma of the range offset (prior mean 0), m.
+    pub offset_prior_sigma_m: f64,
+    /// Prior sigma of the range scale error (prior mean 0).
+    pub scale_prior_sigma: f64,
+    /// Random walk of the offset, m/sqrt(s).
+    pub offset_random_walk_m_per_sqrt_s: f64,
+    /// Random walk of the scale error, 1/sqrt(s).
+    pub scale_random_walk_per_sqrt_s: f64,
+}
+
+/// `[robust]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct RobustToml {
+    /// Huber threshold on the normalized innovation.
+    pub huber_k: f64,
+    /// Hard rejection threshold, innovation sigmas.
+    pub reject_sigma: f64,
+    /// Consecutive rejected or down-weighted ranges before covariance inflation.
+    pub recovery_after: usize,
+    /// Covariance inflation factor.
+    pub recovery_inflation: f64,
+}
+
+/// `[schemes]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SchemesToml {
+    /// Sync epoch period of SC / SI, s.
+    pub epoch_s: f64,
+}
+
+/// `[ablation]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AblationToml {
+    /// `"AS"`, `"SC"` or `"SI"`.
+    pub scheme: String,
+    /// Gate of the hard-gating-only variant, innovation sigmas.
+    pub hard_gate_sigma: f64,
+}
+
+/// The range calibration states of the filter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Calibration {
+    /// `h = |p - b|`: ranges taken at face value.
+    None,
+    /// `h = |p - b| + o`.
+    Offset,
+    /// `h = (1 + s) |p - b| + o`.
+    Affine,
+}
+
+impl Calibration {
+    /// Number of calibration states.
+    pub fn states(self) -> usize {
+        match self {
+            Calibration::None => 0,
+            Calibration::Offset => 1,
+            Calibration::Affine => 2,
+        }
+    }
+
+    /// The TOML spelling.
+    pub fn name(self) -> &'static str {
+        match self {
+            Calibration::None => "none",
+            Calibration::Offset => "offset",
+            Calibration::Affine => "affine",
+        }
+    }
+}
+
+/// Checked settings of a Plaza replay.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlazaSettings {
+    /// `[data] dir`.
+    pub data_dir: String,
+    /// `[data] range_order`.
+    pub range_order: RangeOrder,
+    /// Initial position sigma, m.
+    pub position_sigma: f64,
+    /// Initial heading sigma, rad.
+    pub heading_sigma: f64,
+    /// Odometry noise (calibration random walks are filled in per variant).
+    pub odometry: WheelOdometryParams,
+    /// Range sigma, m.
+    pub range_sigma: f64,
+    /// Common-mode range correlation sigma, m.
+    pub correlation_sigma: f64,
+    /// Calibration of the main runs.
+    pub calibration: Calibration,
+    /// Offset prior sigma, m.
+    pub offset_prior_sigma: f64,
+    /// Scale prior sigma.
+    pub scale_prior_sigma: f64,
+    /// Offset random walk, m/sqrt(s).
+    pub offset_random_walk: f64,
+    /// Scale random walk, 1/sqrt(s).
+    pub scale_random_walk: f64,
+    /// Huber threshold.
+    pub huber_k: f64,
+    /// Hard rejection, sigmas.
+    pub reject_sigma: f64,
+    /// Consecutive rejected or down-weighted ranges before inflation.
+    pub recovery_after: usize,
+    /// Inflation factor.
+    pub recovery_inflation: f64,
+    /// Epoch period, s.
+    pub epoch: f64,
+    /// Scheme of the ablation runs.
+    pub ablation_scheme: UpdateScheme,
+    /// Gate of the hard-gating-only ablation, sigmas.
+    pub hard_gate_sigma: f64,
+}
+
+fn scheme_from_name(file: &str, key: &str, name: &str) -> Result<UpdateScheme, SimError> {
+    UpdateScheme::ALL
+        .into_iter()
+        .find(|s| s.short_name() == name)
+        .ok_or_else(|| {
+            SimError::invalid(
+                file,
+                key,
+                format!("must be \"AS\", \"SC\" or \"SI\", got {name:?}"),
+            )
+        })
+}
+
+impl PlazaToml {
+    /// Checks the values (errors name `file` and the key).
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the key.
+    pub fn check(&self, file: &str) -> Result<PlazaSettings, SimError> {
+        crate::scenario::require_experiment(file, &self.experiment, "plaza")?;
+        let range_order = match self.data.range_order.as_str() {
+            "sort" => RangeOrder::Sort,
+            "strict" => RangeOrder::Strict,
+            other => {
+                return Err(SimError::invalid(
+                    file,
+                    "data.range_order",
+                    format!("must be \"sort\" or \"strict\", got {other:?}"),
+                ));
+            }
+        };
+        let calibration = match self.ranges.calibration.as_str() {
+            "none" => Calibration::None,
+            "offset" => Calibration::Offset,
+            "affine" => Calibration::Affine,
+            other => {
+                return Err(SimError::invalid(
+                    file,
+                    "ranges.calibration",
+                    format!("must be \"none\", \"offset\" or \"affine\", got {other:?}"),
+                ));
+            }
+        };
+        let o = &self.odometry;
+        let r = &self.ranges;
+        let rb = &self.robust;
+        if rb.recovery_after == 0 {
+            return Err(SimError::invalid(
+                file,
+                "robust.recovery_after",
+                "must be at least 1",
+            ));
+        }
+        if !(rb.recovery_inflation.is_finite() && rb.recovery_inflation > 1.0) {
+            return Err(SimError::invalid(
+                file,
+                "robust.recovery_inflation",
+                format!("must be > 1, got {}", rb.recovery_inflation),
+            ));
+        }
+        let huber_k = require_positive(file, "robust.huber_k", rb.huber_k)?;
+        let reject_sigma = require_positive(file, "robust.reject_sigma", rb.reject_sigma)?;
+        if reject_sigma < huber_k {
+            return Err(SimError::invalid(
+                file,
+                "robust.reject_sigma",
+                format!("must be >= robust.huber_k ({huber_k}), got {reject_sigma}"),
+            ));
+        }
+        Ok(PlazaSettings {
+            data_dir: self.data.dir.clone(),
+            range_order,
+            position_sigma: require_positive(
+                file,
+                "initial.position_sigma_m",
+                self.initial.position_sigma_m,
+            )?,
+            heading_sigma: require_positive(
+                file,
+                "initial.heading_sigma_rad",
+                self.initial.heading_sigma_rad,
+            )?,
+            odometry: WheelOdometryParams {
+                distance_sigma_per_sqrt_m: require_non_negative(
+                    file,
+                    "odometry.distance_sigma_per_sqrt_m",
+                    o.distance_sigma_per_sqrt_m,
+                )?,
+                heading_sigma_per_sqrt_m: require_non_negative(
+                    file,
+                    "odometry.heading_sigma_per_sqrt_m",
+                    o.heading_sigma_per_sqrt_m,
+                )?,
+                heading_sigma_per_sqrt_rad: require_non_negative(
+                    file,
+                    "odometry.heading_sigma_per_sqrt_rad",
+                    o.heading_sigma_per_sqrt_rad,
+                )?,
+                calibration_random_walk: Vec::new(),
+            },
+            range_sigma: require_positive(file, "ranges.sigma_m", r.sigma_m)?,
+            correlation_sigma: require_non_negative(
+                file,
+                "ranges.correlation_sigma_m",
+                r.correlation_sigma_m,
+            )?,
+            calibration,
+            offset_prior_sigma: require_positive(
+                file,
+                "ranges.offset_prior_sigma_m",
+                r.offset_prior_sigma_m,
+            )?,
+            scale_prior_sigma: require_positive(
+                file,
+                "ranges.scale_prior_sigma",
+                r.scale_prior_sigma,
+            )?,
+            offset_random_walk: require_non_negative(
+                file,
+                "ranges.offset_random_walk_m_per_sqrt_s",
+                r.offset_random_walk_m_per_sqrt_s,
+            )?,
+            scale_random_walk: require_non_negative(
+                file,
+                "ranges.scale_random_walk_per_sqrt_s",
+                r.scale_random_walk_per_sqrt_s,
+            )?,
+            huber_k,
+            reject_sigma,
+            recovery_after: rb.recovery_after,
+            recovery_inflation: rb.recovery_inflation,
+            epoch: require_positive(file, "schemes.epoch_s", self.schemes.epoch_s)?,
+            ablation_scheme: scheme_from_name(file, "ablation.scheme", &self.ablation.scheme)?,
+            hard_gate_sigma: require_positive(
+                file,
+                "ablation.hard_gate_sigma",
+                self.ablation.hard_gate_sigma,
+            )?,
+        })
+    }
+}
+
+/// Parses and checks a settings text (`file` labels error messages).
+///
+/// # Errors
+/// [`SimError::Toml`] for syntax / schema errors, [`SimError::Invalid`] for bad values.
+pub fn parse_settings(text: &str, file: &str) -> Result<PlazaSettings, SimError> {
+    let toml: PlazaToml = crate::scenario::parse_toml(text, file)?;
+    toml.check(file)
+}
+
+/// Outlier handling of a variant.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum OutlierHandling {
+    /// Huber down-weighting, hard rejection at `reject_sigma`, lock-out recovery.
+    Robust,
+    /// Paper B's gate only: reject beyond this many sigmas, nothing else.
+    HardGate(f64),
+}
+
+/// One filter configuration that is run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Variant {
+    /// Method name in the summary (`AS`, `SC-no-bias`, ...).
+    pub name: String,
+    /// Update scheme.
+    pub scheme: UpdateScheme,
+    /// Calibration states.
+    pub calibration: Calibration,
+    /// Outlier handling.
+    pub outliers: OutlierHandling,
+    /// Whether this is an ablation (not a main method).
+    pub ablation: bool,
+}
+
+impl PlazaSettings {
+    /// The main runs (AS, SC, SI with the configured calibration and robust handling)
+    /// followed by the ablations of [`PlazaSettings::ablation_scheme`]: no calibration,
+    /// offset only, hard gating only, and both.
+    pub fn variants(&self) -> Vec<Variant> {
+        let mut v: Vec<Variant> = UpdateScheme::ALL
+            .into_iter()
+            .map(|scheme| Variant {
+                name: scheme.short_name().to_string(),
+                scheme,
+                calibration: self.calibration,
+                outliers: OutlierHandling::Robust,
+                ablation: false,
+            })
+            .collect();
+        let s = self.ablation_scheme;
+        let base = s.short_name();
+        let hard = OutlierHandling::HardGate(self.hard_gate_sigma);
+        let mut add = |suffix: &str, calibration, outliers| {
+            v.push(Variant {
+                name: format!("{base}-{suffix}"),
+                scheme: s,
+                calibration,
+                outliers,
+                ablation: true,
+            });
+        };
+        add("no-bias", Calibration::None, OutlierHandling::Robust);
+        if self.calibration == Calibration::Affine {
+            add("offset-only", Calibration::Offset, OutlierHandling::Robust);
+        }
+        add("hard-gate", self.calibration, hard);
+        add("no-bias-hard-gate", Calibration::None, hard);
+        v
+    }
+}
