@@ -35,6 +35,15 @@ use nalgebra::{Matrix4, Vector3, Vector4};
 
 use super::params::Vehicle;
 
+/// What checking eq. (21)-(22) of seed 004 found (module docs), for the report; the
+/// coefficient comparison itself is computed by [`eq22_discrepancies`].
+pub const EQ21_EQ22_FINDINGS: &[&str] = &[
+    "eq. (22) is the exact inverse of eq. (21) (with the collective thrust |F_con| = sum T_i as fourth equation): no sign discrepancy",
+    "eq. (21) matches body axes x forward, y right, z down with thrust along -z; its yaw row implies FL and BR spin counter-clockwise seen from above, FR and BL clockwise",
+    "the paper calls l the arm length; eq. (21) needs the lever arm about each body axis (arm length / sqrt(2) for an X frame)",
+    "eq. (22) allocates |F_con|, the norm of the commanded thrust vector, as collective thrust",
+];
+
 /// Rotor names in the order used by every thrust array.
 pub const ROTORS: [&str; 4] = ["FL", "FR", "BL", "BR"];
 

@@ -51,7 +51,9 @@ pub mod wind;
 #[cfg(test)]
 mod tests;
 
-pub use allocation::{eq22_discrepancies, moments_from_thrusts, thrusts_from_wrench};
+pub use allocation::{
+    EQ21_EQ22_FINDINGS, eq22_discrepancies, moments_from_thrusts, thrusts_from_wrench,
+};
 pub use controller::{CascadedController, ControlOutput, ControlState, Setpoint};
 pub use dynamics::{RigidBodyState, StepInput};
 pub use flight::{Flight, fly_on_truth};
