@@ -1,6 +1,6 @@
 //! Error-free IMU increments from sampled truth, by exact inversion of the reduced
 //! mechanization ([`super::mechanization`]); the local-level counterpart of
-//! [`crate::imu_from_truth`].
+//! [`mod@crate::imu_from_truth`].
 //!
 //! For each interval `[t_{k-1}, t_k]`, with the previous increment known:
 //!

@@ -9,6 +9,9 @@
 //! evaluated at that state and input, so the specific force is exactly
 //! `C_n^b (a^n - g^n)` of the returned state. During the rest at the start the vehicle
 //! is held: zero velocity, acceleration and rates, specific force `C_n^b (-g^n)`.
+//! The inputs change at control instants (rotor commands, the held gust), so the
+//! state is continuous there but acceleration and specific force may jump (without
+//! a motor lag, or with gusts); `state_at(t_k)` uses the input that starts at `t_k`.
 
 use fathom_core::{Time, frames::euler_from_nav_from_body};
 use nalgebra::Vector3;
