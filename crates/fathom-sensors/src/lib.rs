@@ -45,8 +45,13 @@
 //! Modules: [`schedule`] (Table 2-3 clocks), [`noise`] (white, held common-mode,
 //! outliers, bias, scale factor, Gauss-Markov, random walk), [`models`] (DVL, AHRS,
 //! range, depth), [`suite`] (the beacons-paper generator and its design
-//! covariance), [`integrated`] (INS and DVL dead reckoning).
+//! covariance), [`integrated`] (INS and DVL dead reckoning), [`inertial`] (IMU error
+//! model, with flicker bias instability), [`allan_imu`] (IMU figures from an Allan
+//! analysis: the ADIS16448 of seed 004), [`barometer`] (eq. 20 and the linear
+//! calibration eq. 11).
 
+pub mod allan_imu;
+pub mod barometer;
 pub mod error;
 pub mod inertial;
 pub mod integrated;

@@ -1,7 +1,8 @@
 //! Evaluation statistics of fathom: distance-error series, per-run statistics
 //! (mean, population std, max, RMSE), Monte Carlo means with Student-t confidence
 //! intervals, sample covariances with per-entry intervals, histograms, and filter
-//! consistency tests (NEES / NIS with chi-square bounds).
+//! consistency tests (NEES / NIS with chi-square bounds), and the overlapping Allan
+//! variance of inertial-sensor records with its noise-figure readings ([`allan`]).
 //!
 //! Conventions (spec README): the distance error is the Euclidean norm of
 //! (estimated - true position) per instant, 3D over x, y, z or 2D over x, y; a run
@@ -47,6 +48,7 @@
 //! # Ok::<(), fathom_stats::StatsError>(())
 //! ```
 
+pub mod allan;
 pub mod consistency;
 pub mod covariance;
 pub mod error;
@@ -57,6 +59,7 @@ pub mod quantile;
 pub mod run_stats;
 pub mod sample;
 
+pub use allan::{AllanPoint, RateNoise, overlapping_allan_variance, white_noise_coefficient};
 pub use consistency::{ChiSquareBounds, nees, nis};
 pub use covariance::{
     CiMethod, CovarianceCi, MaxDeviation, MeanMode, covariance, covariance_ci_batch_means,
