@@ -16,5 +16,6 @@ mod imu_allan;
 mod noise;
 mod plaza;
 mod quadrotor_ins;
+mod report_text;
 mod user_scenarios;
 mod vkf;

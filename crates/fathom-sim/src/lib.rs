@@ -55,8 +55,7 @@ pub mod plot;
 pub mod progress;
 pub mod replay;
 pub mod scenario;
-#[cfg(test)]
-mod scenario_docs;
+pub mod scenario_docs;
 pub mod user_run;
 
 pub use driver::{PaperOptions, PaperResult, error_chain, run_paper};

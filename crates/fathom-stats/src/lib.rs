@@ -71,7 +71,9 @@ pub use error_series::{
     distance_series_3d,
 };
 pub use histogram::Histogram;
-pub use monte_carlo::{AggregateRow, Aggregator, MeanCi, MeanInterval, mean_ci, mean_interval};
+pub use monte_carlo::{
+    AggregateRow, Aggregator, MeanCi, MeanInterval, mean_and_ci95, mean_ci, mean_interval,
+};
 pub use quantile::{chi2_cdf, chi2_quantile, normal_quantile, student_t_quantile};
 pub use run_stats::RunStats;
 pub use sample::{Quartiles, median, paired_mean_ci, quantile, rms};

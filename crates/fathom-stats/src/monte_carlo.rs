@@ -97,6 +97,16 @@ pub fn mean_ci(values: &[f64]) -> Result<MeanCi, StatsError> {
     })
 }
 
+/// [`mean_ci`] as `(mean, [lo, hi])`, the interval being `[mean, mean]` for a single
+/// run: the `value` and `ci95` of a summary row.
+///
+/// # Errors
+/// As [`mean_interval`].
+pub fn mean_and_ci95(values: &[f64]) -> Result<(f64, [f64; 2]), StatsError> {
+    let m = mean_ci(values)?;
+    Ok((m.mean, m.bounds()))
+}
+
 /// One aggregated row: a (method, metric) key and its [`MeanCi`] over runs.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct AggregateRow {

@@ -12,7 +12,7 @@ use crate::experiment::{Analysis, Batch, DynExperiment, Environment, Experiment}
 use crate::output::{Claim, Row, read_summary_json};
 use crate::plot::{LinePlot, Series};
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct DummyScenario {
     experiment: String,

@@ -68,6 +68,9 @@ pub trait DynExperiment: Send + Sync {
     fn about(&self) -> &'static str;
     /// [`Experiment::PRESET`].
     fn preset(&self) -> &'static str;
+    /// The JSON schema of the scenario file (field docs as descriptions), from which
+    /// `docs/scenarios.md` is generated.
+    fn schema(&self) -> schemars::Schema;
 
     /// Parses `text`, applies the overrides and checks it (`fathom check`).
     ///
@@ -156,6 +159,10 @@ impl<E: Experiment> DynExperiment for E {
 
     fn preset(&self) -> &'static str {
         E::PRESET
+    }
+
+    fn schema(&self) -> schemars::Schema {
+        schemars::schema_for!(E::Scenario)
     }
 
     fn resolve(

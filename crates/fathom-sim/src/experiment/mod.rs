@@ -46,7 +46,7 @@ pub use analysis::{Analysis, OutputFile};
 pub use dynamic::{DynExperiment, Executed, Job, Resolved, SingleRunFn};
 
 /// The header keys every scenario file has, read and overridden by the driver.
-pub trait ScenarioFile: Serialize + DeserializeOwned + Send + Sync {
+pub trait ScenarioFile: Serialize + DeserializeOwned + schemars::JsonSchema + Send + Sync {
     /// The `experiment` key as written in the file.
     fn experiment(&self) -> &str;
     /// Monte Carlo runs of the main batch; `None` for a deterministic experiment

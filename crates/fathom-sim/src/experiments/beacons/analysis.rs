@@ -2,7 +2,7 @@
 //! error statistics, outlier recall and false rejections (the rows), and the claims.
 
 use fathom_estimators::schemes::UpdateScheme;
-use fathom_stats::mean_ci;
+use fathom_stats::mean_and_ci95;
 
 use super::paper::{PAPER_INJECTED, PAPER_TABLE13, PAPER_TABLE14};
 use super::run::SchemeStats;
@@ -20,11 +20,8 @@ pub(super) struct Agg {
 }
 
 fn agg(values: &[f64]) -> Result<Agg, SimError> {
-    let ci = mean_ci(values)?;
-    Ok(Agg {
-        mean: ci.mean,
-        ci: ci.bounds(),
-    })
+    let (mean, ci) = mean_and_ci95(values)?;
+    Ok(Agg { mean, ci })
 }
 
 /// The aggregated statistics of one scheme on one case.

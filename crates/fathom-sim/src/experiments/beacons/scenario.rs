@@ -4,6 +4,7 @@ use fathom_sensors::{
     BeaconSuiteConfig, BeaconSuiteParams, NoiseSwitches, Timing, noise::OutlierParams,
 };
 use fathom_traj::velocity_command::VelocityCommandParams;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::MAIN_CASE;
@@ -12,105 +13,157 @@ use crate::SimError;
 use crate::experiments::common::{BeaconsToml, MotionToml, check_case_name};
 use crate::scenario::{require_non_negative, require_positive};
 
-/// The `beacons` scenario file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// EKF range-beacon localization.
+///
+/// Paper B (Han et al. 2016, seed 003) §5, Tables 12-14: a 4-state `(x, y, z, ψ)` EKF
+/// dead-reckons on DVL velocity and AHRS yaw rate and is corrected by four ranges and
+/// depth, under the update schemes AS (asynchronous), SC (synchronous collective) and
+/// SI (synchronous individual), with chi-square gating of every range. Preset:
+/// `scenarios/beacons.toml`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BeaconsScenario {
-    /// The experiment this scenario is for: must be `"beacons"` (lets `fathom run`
-    /// pick the experiment from the file).
+    /// The experiment this file is for.
+    ///
+    /// Range: `"beacons"`.
     pub experiment: String,
-    /// Monte Carlo runs.
+    /// Monte Carlo runs (spec: ≥ 100); `--runs` overrides.
+    ///
+    /// Range: ≥ 2.
     pub runs: usize,
-    /// Base seed; run `i` uses ChaCha stream `i`.
+    /// Run `i` uses ChaCha stream `i` of this seed.
+    ///
+    /// Range: 0 … 2⁶⁴−1.
     pub base_seed: u64,
-    /// Robot motion.
+    /// Robot motion (Tables 1 and 9).
     pub motion: MotionToml,
-    /// Sensor clocks.
+    /// Sensor clocks (Tables 2-3).
     pub timing: TimingToml,
     /// Beacon positions.
     pub beacons: BeaconsToml,
-    /// Sensor noise.
+    /// Sensor noise (Tables 4-8, 10).
     pub noise: NoiseToml,
-    /// Filter settings.
+    /// The localization filter (Table 12).
     pub ekf: EkfToml,
     /// Figure settings.
     pub figures: FiguresToml,
-    /// The cases.
+    /// Sensor configurations (Table 13 is `high`).
     pub cases: Vec<CaseToml>,
 }
 
 /// `[timing]`: synchronous and asynchronous clocks (Tables 2-3).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TimingToml {
-    /// Sample-time jitter sigma, s.
+    /// Sample-time jitter σ_t of every clock (not given by the paper).
+    ///
+    /// Unit: s. Range: ≥ 0 and < 1/4 of every period in use.
     pub jitter_sigma_s: f64,
-    /// Common period of synchronous sensors, s.
+    /// The one clock of all sensors in cases with `timing = "sync"` (paper: 0.1).
+    ///
+    /// Unit: s. Range: > 0.
     pub sync_period_s: f64,
-    /// Asynchronous DVL period, s.
+    /// Asynchronous DVL period (Table 3: 0.20); also how long the filter holds a
+    /// velocity sample.
+    ///
+    /// Unit: s. Range: > 0.
     pub dvl_period_s: f64,
-    /// Asynchronous AHRS period, s.
+    /// Asynchronous AHRS period (Table 3: 0.01).
+    ///
+    /// Unit: s. Range: > 0.
     pub ahrs_period_s: f64,
-    /// Asynchronous period of every range sensor, s.
+    /// Asynchronous period of each range sensor, one clock per beacon (Table 3: 0.10).
+    ///
+    /// Unit: s. Range: > 0.
     pub range_period_s: f64,
-    /// Asynchronous depth period, s.
+    /// Asynchronous depth period (Table 3: 0.02).
+    ///
+    /// Unit: s. Range: > 0.
     pub depth_period_s: f64,
 }
 
 /// `[noise]`: sensor noise (Tables 4-8, 10).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NoiseToml {
-    /// DVL `(u, v, w)` (m/s) and AHRS `(p, q, r)` (rad/s) noise sigmas. The 4-state
-    /// filter uses `u, v, w` and `r`; `p` and `q` only enter the simulated AHRS data.
+    /// DVL `(u, v, w)` and AHRS `(p, q, r)` noise σ (Table 10: 0.1, 0, 0.1, 0, 0, 0.1);
+    /// the filter uses u, v, w and r (p and q only enter the simulated AHRS data).
+    ///
+    /// Unit: m/s (u, v, w), rad/s (p, q, r). Range: each ≥ 0.
     pub velocity_sigma: [f64; 6],
-    /// White range noise sigma, m.
+    /// White range noise σ_r (paper: 0.1).
+    ///
+    /// Unit: m. Range: > 0.
     pub range_sigma_m: f64,
-    /// White depth noise sigma, m.
+    /// White depth noise σ_d (paper: 0.2).
+    ///
+    /// Unit: m. Range: > 0.
     pub depth_sigma_m: f64,
-    /// Hold time of the common-mode range noise, s.
+    /// Hold time t_gap of the common-mode range noise (Table 7: 1).
+    ///
+    /// Unit: s. Range: > 0.
     pub corr_gap_s: f64,
-    /// Number of injected range outliers (over all beacons; at most the run's range
-    /// samples, which is only checked when the data are generated).
+    /// Number N of range samples (of all beacons) shifted by ±`outlier_magnitude_m`
+    /// (Table 8; Table 14 counts 276); 0 = no outliers.
+    ///
+    /// Range: ≥ 0, at most the run's range samples (checked when running).
     pub outlier_count: usize,
-    /// Outlier magnitude, m.
+    /// Outlier magnitude σ_o, random sign (Table 8: 1).
+    ///
+    /// Unit: m. Range: ≥ 0.
     pub outlier_magnitude_m: f64,
 }
 
 /// `[ekf]`: the localization filter.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EkfToml {
-    /// SC/SI epoch period, s; also the period at which every scheme's error is
-    /// evaluated.
+    /// Sync epoch of SC and SI (paper: 0.1); also the period at which every scheme's
+    /// error is evaluated.
+    ///
+    /// Unit: s. Range: > 0.
     pub epoch_period_s: f64,
-    /// Gate distance `d` (reject a range when `nu^2 / S > d^2`, eq. 10); depth is never
-    /// gated.
+    /// Gate distance d of eq. (10): a range is rejected when `ν²/S > d²` (paper: 2.5,
+    /// two-sided 98.76 %); depth is never gated.
+    ///
+    /// Unit: innovation σ. Range: > 0.
     pub gate_sigma: f64,
-    /// AS stale tolerance, s: a measurement stamped up to this much before the filter
-    /// time is still applied (at the filter time), older ones are dropped.
+    /// AS only: a measurement stamped up to this much before the filter time is still
+    /// applied (at the filter time); older ones are dropped.
+    ///
+    /// Unit: s. Range: ≥ 0.
     pub stale_tolerance_s: f64,
-    /// Initial position sigma, m.
+    /// Initial position σ per axis; each run's initial estimate is drawn from N(truth,
+    /// P0).
+    ///
+    /// Unit: m. Range: > 0.
     pub init_pos_sigma_m: f64,
-    /// Initial heading sigma, rad.
+    /// Initial heading σ.
+    ///
+    /// Unit: rad. Range: > 0.
     pub init_yaw_sigma_rad: f64,
-    /// Whether the filter's input error includes the per-step motion noise.
+    /// Whether the filter's input error adds the vehicle's per-step motion noise to the
+    /// sensor noise: σ = √(σ_sensor² + σ_motion²) (the held sample misses the velocity
+    /// changes within a sensor period).
     pub include_motion_noise: bool,
-    /// Factor on the process-noise sigmas.
+    /// Factor on every process-noise σ (1 = as designed).
+    ///
+    /// Range: > 0.
     pub process_noise_scale: f64,
 }
 
 /// `[figures]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FiguresToml {
-    /// Monte Carlo run shown in the single-run figures; must be below `runs` (or
-    /// `--runs` when given).
+    /// The Monte Carlo run shown in the single-run figures.
+    ///
+    /// Range: < `runs` (and < `--runs` when given).
     pub run: usize,
 }
 
 /// Sensor timing of a case.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum TimingKind {
     /// Every sensor on its own clock (Table 3).
@@ -120,15 +173,23 @@ pub enum TimingKind {
 }
 
 /// `[[cases]]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CaseToml {
-    /// Case name (`high`, `low`, `none`, `sync`). One case must be `high` (Table 13's
-    /// main case); a `low` case adds the claim `sc_advantage_shrinks_low_corr`.
+    /// Case name; `high` is the main case (Tables 13-14, paper numbers); with a `low`
+    /// case the claim `sc_advantage_shrinks_low_corr` is evaluated.
+    ///
+    /// Range: `[A-Za-z0-9_-]`, unique; one case must be `high`.
     pub name: String,
-    /// Sensor timing.
+    /// Every sensor on its own clock (Table 3) or one common clock
+    /// (`timing.sync_period_s`).
+    ///
+    /// Range: `"async"` or `"sync"`.
     pub timing: TimingKind,
-    /// Common-mode range noise sigma, m (0 = none).
+    /// Common-mode range noise σ_c (0 = none; paper: 0.2 high, 0.05 low); SC's stacked
+    /// update uses it in R.
+    ///
+    /// Unit: m. Range: ≥ 0.
     pub corr_sigma_m: f64,
 }
 

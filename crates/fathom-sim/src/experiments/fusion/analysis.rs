@@ -2,7 +2,7 @@
 //! feedback's effect on the INS integrator, the sensitivity sweeps, the claims with
 //! paired CIs, and the calls into the figures and the report.
 
-use fathom_stats::{mean_ci, paired_mean_ci};
+use fathom_stats::{mean_and_ci95, paired_mean_ci};
 use rand_chacha::ChaCha8Rng;
 
 use super::Prepared;
@@ -85,12 +85,6 @@ pub fn values(results: &[RunResult], method: Method, metric: &str) -> Vec<f64> {
         .collect()
 }
 
-/// Mean and 95 % CI of a list of run values.
-pub(super) fn ci(values: &[f64]) -> Result<(f64, [f64; 2]), SimError> {
-    let c = mean_ci(values)?;
-    Ok((c.mean, c.bounds()))
-}
-
 /// Paired difference `a - b` of a metric over runs: mean and 95 % CI.
 pub(super) fn paired(
     results: &[RunResult],
@@ -147,7 +141,7 @@ fn sweep_results(p: &Prepared, records: &[Vec<RunResult>]) -> Result<Vec<SweepRe
     for (point, results) in p.sweep_points.iter().zip(records) {
         let row = SWEEP_METHODS
             .iter()
-            .map(|&m| ci(&values_of_mean(results, m)))
+            .map(|&m| mean_and_ci95(&values_of_mean(results, m)))
             .collect::<Result<Vec<_>, _>>()?;
         let sw = &mut out[point.sweep];
         sw.values.push(point.value);
@@ -177,7 +171,7 @@ pub(super) fn analyse(
     for m in Method::ALL {
         let paper = paper_values(m);
         for (k, metric) in METRICS.iter().enumerate() {
-            let (mean, [lo, hi]) = ci(&values(&results, m, metric))?;
+            let (mean, [lo, hi]) = mean_and_ci95(&values(&results, m, metric))?;
             out.row(
                 Row::new(m.name(), *metric, mean)
                     .with_paper(paper.and_then(|p| p.get(k).copied()))
@@ -203,9 +197,9 @@ pub(super) fn analyse(
                 .fold(0.0, f64::max)
         })
         .collect();
-    let (m_fb, [lo, hi]) = ci(&ins_fb_mean)?;
+    let (m_fb, [lo, hi]) = mean_and_ci95(&ins_fb_mean)?;
     out.row(Row::new("EFF", "ins_integrator_mean_err", m_fb).with_ci95(lo, hi));
-    let (m_fbx, [lo, hi]) = ci(&ins_fb_max)?;
+    let (m_fbx, [lo, hi]) = mean_and_ci95(&ins_fb_max)?;
     out.row(Row::new("EFF", "ins_integrator_max_err", m_fbx).with_ci95(lo, hi));
 
     for c in claims(setup, &results)? {
@@ -237,10 +231,10 @@ fn beats_all(
     let mut parts = vec![format!(
         "{} {:.4}",
         a.name(),
-        ci(&values(results, a, metric))?.0
+        mean_and_ci95(&values(results, a, metric))?.0
     )];
     for &b in others {
-        let (mb, _) = ci(&values(results, b, metric))?;
+        let (mb, _) = mean_and_ci95(&values(results, b, metric))?;
         let (d, [lo, hi]) = paired(results, a, b, metric)?;
         holds &= hi < -setup.min_relative_improvement * mb;
         parts.push(format!(
@@ -300,7 +294,7 @@ pub(super) fn claims(setup: &FusionSetup, results: &[RunResult]) -> Result<Vec<C
         with_threshold(setup, detail),
     ));
     let lim = setup.turn_ratio_limit;
-    let ratio = |m: Method| ci(&values(results, m, "turn_ratio_3d"));
+    let ratio = |m: Method| mean_and_ci95(&values(results, m, "turn_ratio_3d"));
     let (re, re_ci) = ratio(Method::Eff)?;
     let (rm, rm_ci) = ratio(Method::Mf)?;
     let (rt, rt_ci) = ratio(Method::T2t)?;

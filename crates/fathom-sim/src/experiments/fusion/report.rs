@@ -5,10 +5,12 @@
 
 use fathom_traj::FusionMission;
 
-use super::analysis::{RunResult, SWEEP_METHODS, SweepResult, ci, paired, paper_values, values};
+use super::analysis::{RunResult, SWEEP_METHODS, SweepResult, paired, paper_values, values};
 use super::figures::FILTERS;
 use super::scenario::FusionSetup;
 use super::sim::Method;
+use fathom_stats::mean_and_ci95;
+
 use crate::SimError;
 use crate::output::fixed as f;
 use crate::output::md_table;
@@ -54,7 +56,7 @@ fn max_gap(sw: &SweepResult, a: Method, b: Method) -> f64 {
 
 /// Mean over runs of a metric.
 fn mean(results: &[RunResult], m: Method, metric: &str) -> Result<f64, SimError> {
-    Ok(ci(&values(results, m, metric))?.0)
+    Ok(mean_and_ci95(&values(results, m, metric))?.0)
 }
 
 pub(super) fn section(
@@ -86,8 +88,8 @@ pub(super) fn section(
         let mut rows = Vec::new();
         for m in Method::ALL {
             let p = paper_values(m);
-            let (mm, mc) = ci(&values(results, m, mean_key))?;
-            let (sm, sc) = ci(&values(results, m, std_key))?;
+            let (mm, mc) = mean_and_ci95(&values(results, m, mean_key))?;
+            let (sm, sc) = mean_and_ci95(&values(results, m, std_key))?;
             let ps = |k: usize| p.map_or("—".to_string(), |p| f(p[k], 2));
             rows.push(vec![
                 m.name().to_string(),
@@ -150,13 +152,15 @@ pub(super) fn section(
         &rows,
     ));
     let w_ins = t.v_dvl.powi(2) / (t.v_ins.powi(2) + t.v_dvl.powi(2));
-    let ins_fb_mean = ci(&results
-        .iter()
-        .map(|r| {
-            let e = &r.output.ins_err_with_feedback;
-            e.iter().sum::<f64>() / e.len().max(1) as f64
-        })
-        .collect::<Vec<_>>())?
+    let ins_fb_mean = mean_and_ci95(
+        &results
+            .iter()
+            .map(|r| {
+                let e = &r.output.ins_err_with_feedback;
+                e.iter().sum::<f64>() / e.len().max(1) as f64
+            })
+            .collect::<Vec<_>>(),
+    )?
     .0;
     let ins_fb_max = results
         .iter()
@@ -306,7 +310,7 @@ pub(super) fn section(
     ));
     let mut rows = Vec::new();
     for m in Method::ALL {
-        let (r, c) = ci(&values(results, m, "turn_ratio_3d"))?;
+        let (r, c) = mean_and_ci95(&values(results, m, "turn_ratio_3d"))?;
         rows.push(vec![m.name().to_string(), f(r, 3), ci_str(c, 3)]);
     }
     s.push_str(&md_table(&["method", "turn ratio (3D)", "95 % CI"], &rows));

@@ -7,141 +7,224 @@ use fathom_traj::{
 };
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use super::sim::{FilterTuning, RunConfig};
 use crate::SimError;
 use crate::scenario::{require_non_negative, require_positive};
 
-/// The `fusion` scenario file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// INS + DVL fusion architectures.
+///
+/// Paper A (Lee & Yoon 2011, seed 000): measurement fusion (MF), track-to-track fusion
+/// (T2T, eq. 10) and the equalize-fuse-feedback filter (EFF, eqs. 9-10 plus feedback)
+/// on one cubic-spline UUV mission; many noise realizations of the same mission.
+/// Preset: `scenarios/fusion.toml`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FusionScenario {
-    /// The experiment this scenario is for: must be `"fusion"` (lets `fathom run`
-    /// pick the experiment from the file).
+    /// The experiment this file is for.
+    ///
+    /// Range: `"fusion"`.
     pub experiment: String,
-    /// Monte Carlo runs (noise realizations of the one mission).
+    /// Monte Carlo runs (noise realizations; spec: ≥ 200); `--runs` overrides.
+    ///
+    /// Range: ≥ 2.
     pub runs: usize,
-    /// Base seed; run `i` uses ChaCha stream `i`.
+    /// Run `i` draws its INS and DVL seeds from ChaCha stream `i` of this seed.
+    ///
+    /// Range: 0 … 2⁶⁴−1.
     pub base_seed: u64,
-    /// Seed of the mission's knot perturbations (fixed across runs). The generated
-    /// mission must pass its self-checks (speeds, depth, course changes); that is
-    /// only checked when running, not by `fathom check`.
+    /// Seed of the mission's knot perturbations: one mission for all runs (the
+    /// generated mission must pass its self-checks: speeds, depth, course changes;
+    /// checked when running).
+    ///
+    /// Range: 0 … 2⁶⁴−1.
     pub trajectory_seed: u64,
-    /// The mission.
+    /// The mission (paper §4.1).
     pub mission: MissionToml,
-    /// The INS.
+    /// The INS (main sensor, large error).
     pub ins: InsToml,
-    /// The DVL.
+    /// The DVL (assistance sensor, small error).
     pub dvl: DvlToml,
-    /// Filter tuning.
+    /// Filter tuning (`Q = w² I6`, `R = v² I3`, eqs. 5-6).
     pub filters: FiltersToml,
-    /// Analysis settings.
+    /// Analysis settings (course changes, zoom, histogram, claims).
     pub analysis: AnalysisToml,
-    /// Sensitivity sweep.
+    /// Sweeps (not in the paper).
     pub sensitivity: SensitivityToml,
 }
 
 /// `[mission]`: the cubic-spline UUV mission (paper §4.1).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MissionToml {
-    /// Mission length, s.
+    /// Mission length (paper: 1000).
+    ///
+    /// Unit: s. Range: > 0.
     pub duration_s: f64,
-    /// Sensor and filter step, s (paper: T = 1).
+    /// Sensor and filter step T (paper: 1); also the step of the course-change
+    /// detection.
+    ///
+    /// Unit: s. Range: > 0, divides `duration_s` into ≥ 10 steps.
     pub step_s: f64,
-    /// Course changes during the search (paper: 10; knots = 2 n + 5).
+    /// Course changes of the search pattern (paper: 10); the spline has `2 n + 5` knots
+    /// evenly spaced over the mission.
+    ///
+    /// Range: ≥ 1.
     pub n_course_changes: usize,
-    /// Search depth, m.
+    /// Depth of the search phase (paper: 100).
+    ///
+    /// Unit: m. Range: > 0.
     pub search_depth_m: f64,
-    /// Allowed depth deviation during the search, m.
+    /// Allowed depth deviation during the search.
+    ///
+    /// Unit: m. Range: > 0.
     pub depth_tolerance_m: f64,
-    /// Slowest allowed speed during the search, kt.
+    /// Slowest allowed speed during the search (paper: 1).
+    ///
+    /// Unit: kt. Range: > 0 and < `max_speed_kt`.
     pub min_speed_kt: f64,
-    /// Fastest allowed speed during the search, kt.
+    /// Fastest allowed speed during the search (paper: 6).
+    ///
+    /// Unit: kt. Range: > 0.
     pub max_speed_kt: f64,
-    /// Nominal leg speeds, kt (`n_course_changes + 1` values).
+    /// Nominal speed of each leg (leg 0 is flown while diving, the last while
+    /// surfacing).
+    ///
+    /// Unit: kt. Range: `n_course_changes + 1` values in [`min_speed_kt`,
+    /// `max_speed_kt`].
     pub leg_speeds_kt: Vec<f64>,
-    /// Eastward offset of each U-turn, m.
+    /// Eastward offset of each U-turn of the lawnmower pattern.
+    ///
+    /// Unit: m. Range: > 0.
     pub turn_width_m: f64,
-    /// Std of the random horizontal knot offsets, m.
+    /// σ of the random horizontal knot offsets ("random values" in the knots).
+    ///
+    /// Unit: m. Range: ≥ 0.
     pub perturbation_sigma_m: f64,
-    /// Smallest heading change counted as a course change, deg.
+    /// Smallest heading change counted as a course change.
+    ///
+    /// Unit: deg. Range: (0, 180).
     pub min_course_change_deg: f64,
 }
 
 /// `[ins]`: accelerometer errors of the INS integrator.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InsToml {
-    /// Per-axis constant bias std, m/s^2.
+    /// σ of the per-axis accelerometer bias `b_a`, constant per run, in `a_m = a + b_a
+    /// + n_a` (not given by the paper; spec A: 2e-4).
+    ///
+    /// Unit: m/s². Range: ≥ 0.
     pub accel_bias_sigma_mps2: f64,
-    /// Per-axis white noise std per sample, m/s^2.
+    /// σ of the per-axis white accelerometer noise `n_a` per sample (spec A: 1e-3); the
+    /// INS integrates `a_m` twice.
+    ///
+    /// Unit: m/s². Range: ≥ 0.
     pub accel_noise_sigma_mps2: f64,
 }
 
 /// `[dvl]`: velocity errors of the DVL dead reckoning.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DvlToml {
-    /// Half width `h` of the per-axis scale-factor error `U(-h, h)`, drawn per run; a
-    /// fraction (0.002 = 0.2 %).
+    /// Half width h of the per-axis scale-factor error `s ~ U(-h, h)`, drawn per run,
+    /// in `v_m = (1 + s) v + n_v` (0.002 = 0.2 %).
+    ///
+    /// Unit: - (fraction). Range: ≥ 0.
     pub scale_half_width: f64,
-    /// Per-axis white velocity noise std, m/s.
+    /// σ of the per-axis white velocity noise `n_v` per sample (spec A: 0.02); the DVL
+    /// position is its velocity integrated once.
+    ///
+    /// Unit: m/s. Range: ≥ 0.
     pub vel_noise_sigma_mps: f64,
 }
 
 /// `[filters]`: paper tuning `Q = w^2 I6`, `R = v^2 I3`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FiltersToml {
-    /// INS track process noise scale, m.
+    /// Process-noise scale w of the INS track (paper: 10).
+    ///
+    /// Unit: m. Range: ≥ 0.
     pub w_ins_m: f64,
-    /// DVL track process noise scale, m.
+    /// Process-noise scale w of the DVL track (paper: 1).
+    ///
+    /// Unit: m. Range: ≥ 0.
     pub w_dvl_m: f64,
-    /// INS position measurement std, m.
+    /// σ of the INS position measurement (paper: "1 g ≈ 9.8 m/s²", read as 9.8 m).
+    ///
+    /// Unit: m. Range: > 0.
     pub v_ins_m: f64,
-    /// DVL position measurement std, m.
+    /// σ of the DVL position measurement (paper: "0.02 m/s²", read as 0.02 m).
+    ///
+    /// Unit: m. Range: > 0.
     pub v_dvl_m: f64,
-    /// MF process noise scale, m.
+    /// Process-noise scale of the single MF filter (not given by the paper).
+    ///
+    /// Unit: m. Range: ≥ 0.
     pub w_mf_m: f64,
-    /// Initial position std of every filter, m.
+    /// Initial position σ of every filter (not given by the paper).
+    ///
+    /// Unit: m. Range: > 0.
     pub initial_sigma_pos_m: f64,
-    /// Initial velocity std of every filter, m/s.
+    /// Initial velocity σ of every filter (not given by the paper).
+    ///
+    /// Unit: m/s. Range: > 0.
     pub initial_sigma_vel_mps: f64,
 }
 
 /// `[analysis]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AnalysisToml {
-    /// Half width of the window around each course change, s (spec: 7).
+    /// Half width of the window around each detected course change (spec: 7); the turn
+    /// ratio is the mean error inside the windows over the mean error outside.
+    ///
+    /// Unit: s. Range: > 0.
     pub turn_half_window_s: f64,
-    /// A method "spikes" at turns when its turn ratio exceeds this; EFF is robust
-    /// when its ratio is at most this (spec: 1.1).
+    /// A method "spikes" at turns when its turn ratio exceeds this; EFF is robust when
+    /// its ratio is at most this (spec: 1.1; claim `eff_robust_at_turns`).
+    ///
+    /// Range: > 0.
     pub turn_ratio_limit: f64,
-    /// Centre of the zoom window of the path figures, s (paper: 440).
+    /// Centre of the zoom window of the path figures (paper: 440).
+    ///
+    /// Unit: s. Range: [0, `mission.duration_s`].
     pub zoom_center_s: f64,
-    /// Half width of the zoom window, s (paper: 7).
+    /// Half width of the zoom window (paper: 7).
+    ///
+    /// Unit: s. Range: > 0.
     pub zoom_half_width_s: f64,
     /// Bins of the error histograms.
+    ///
+    /// Range: ≥ 2.
     pub histogram_bins: usize,
-    /// Smallest improvement, relative to the competitor's value, that makes "X beats
-    /// Y" hold: the paired 95 % CI of `X - Y` must lie below `-min * Y` (the paper
-    /// claims 25..60 % improvements, not differences of micrometres).
+    /// A claim "X beats Y" holds only when the paired 95 % CI of `X - Y` lies below
+    /// `-min × Y` (0.01 = 1 %).
+    ///
+    /// Unit: - (fraction). Range: ≥ 0.
     pub min_relative_improvement: f64,
 }
 
 /// `[sensitivity]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SensitivityToml {
-    /// Monte Carlo runs per sweep value (with `--runs N`: `ceil(N / 4)`, at least 2,
-    /// at most this).
+    /// At most this many Monte Carlo runs per sweep value: each sweep value runs
+    /// `ceil(runs / 4)` runs (`runs` after `--runs`), clamped to [2, this].
+    ///
+    /// Range: ≥ 2.
     pub runs: usize,
-    /// DVL velocity noise values, m/s (filters keep their tuning).
+    /// DVL velocity-noise values of the first sweep (the filters keep their tuning).
+    ///
+    /// Unit: m/s. Range: ≥ 2 values, each > 0, strictly increasing.
     pub dvl_vel_noise_mps: Vec<f64>,
-    /// Filters' `v_DVL` values, m (sensors keep their defaults).
+    /// The filters' `v_DVL` values of the second sweep (the sensors keep the scenario's
+    /// values).
+    ///
+    /// Unit: m. Range: ≥ 2 values, each > 0, strictly increasing.
     pub filter_v_dvl_m: Vec<f64>,
 }
 

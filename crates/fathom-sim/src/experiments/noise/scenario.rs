@@ -4,81 +4,116 @@ use fathom_sensors::{
     BeaconSuiteConfig, BeaconSuiteParams, NoiseSwitches, Timing, noise::OutlierParams,
 };
 use fathom_traj::velocity_command::VelocityCommandParams;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::SimError;
 use crate::experiments::common::{BeaconsToml, MotionToml, check_case_name};
 use crate::scenario::{require_non_negative, require_positive};
 
-/// The `noise` scenario file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Noise-generator verification.
+///
+/// Paper B (Han et al. 2016, seed 003) §4.1-4.3, eqs. (5)-(9): the 5×5 covariance of
+/// the noise of `[range1..4, depth]`, estimated per case and run, against the design
+/// `diag(σ_r² ×4, σ_d²) + σ_c² (ones(4,4) ⊕ 0)`. Preset: `scenarios/noise.toml`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NoiseScenario {
-    /// The experiment this scenario is for: must be `"noise"` (lets `fathom run`
-    /// pick the experiment from the file).
+    /// The experiment this file is for.
+    ///
+    /// Range: `"noise"`.
     pub experiment: String,
-    /// Monte Carlo runs of the paper-length generation.
+    /// Monte Carlo runs of the paper-length generation; `--runs` overrides.
+    ///
+    /// Range: ≥ 2.
     pub runs: usize,
-    /// Base seed; run `i` uses ChaCha stream `i`.
+    /// Run `i` uses ChaCha stream `i` of this seed.
+    ///
+    /// Range: 0 … 2⁶⁴−1.
     pub base_seed: u64,
-    /// Robot motion.
+    /// Robot motion (Tables 1 and 9).
     pub motion: MotionToml,
-    /// Synchronous sampling.
+    /// Synchronous sampling (Tables 2-3).
     pub timing: TimingToml,
-    /// Beacon positions (exactly four: the paper's 5x5 matrices).
+    /// Beacon positions.
     pub beacons: BeaconsToml,
-    /// Noise levels.
+    /// Noise levels (Table 10, Table 7).
     pub noise: NoiseLevelsToml,
     /// The convergence run.
     pub long_run: LongRunToml,
-    /// The cases.
+    /// The noise configurations (eqs. 5-9).
     pub cases: Vec<CaseToml>,
 }
 
 /// `[timing]`: synchronous sampling.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TimingToml {
-    /// Common sample period, s.
+    /// Common sample period of the four ranges and the depth gauge, so that the five
+    /// noises form one vector per epoch (paper: 0.1).
+    ///
+    /// Unit: s. Range: > 0.
     pub period_s: f64,
-    /// Sample-time jitter sigma, s (< `period_s` / 4).
+    /// Sample-time jitter σ_t: `t_i = t_{i-1} + dt + N(0, σ_t²)` (not given by the
+    /// paper).
+    ///
+    /// Unit: s. Range: ≥ 0 and < `period_s`/4.
     pub jitter_sigma_s: f64,
 }
 
 /// `[noise]`: noise levels shared by the cases.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NoiseLevelsToml {
-    /// White range noise sigma, m.
+    /// White range noise σ_r (paper: 0.1).
+    ///
+    /// Unit: m. Range: > 0.
     pub range_sigma_m: f64,
-    /// White depth noise sigma, m.
+    /// White depth noise σ_d (paper: 0.2).
+    ///
+    /// Unit: m. Range: > 0.
     pub depth_sigma_m: f64,
-    /// Hold time of the common-mode range noise, s.
+    /// Hold time t_gap of the common-mode range noise: one value, added to all four
+    /// ranges, redrawn every t_gap (Table 7: 1).
+    ///
+    /// Unit: s. Range: > 0.
     pub corr_gap_s: f64,
 }
 
 /// `[long_run]`: the convergence run.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct LongRunToml {
-    /// Length, s.
+    /// Length of one long run that shows convergence to the design.
+    ///
+    /// Unit: s. Range: > 0 and ≥ `motion.duration_s`.
     pub duration_s: f64,
-    /// Motion step, s (coarser than the paper's: the noise does not depend on the path).
+    /// Its motion step (coarser than the paper's: the noise does not depend on the
+    /// path).
+    ///
+    /// Unit: s. Range: > 0.
     pub step_s: f64,
-    /// Largest accepted relative deviation from the design.
+    /// Largest accepted relative deviation of the long run's covariance from the design
+    /// (claim `generator_cov_matches_design`; 0.05 = 5 %).
+    ///
+    /// Range: > 0.
     pub max_rel_dev: f64,
 }
 
 /// `[[cases]]`: one noise configuration.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CaseToml {
-    /// Case name. `gaussian`, `corr_high`, `corr_low`, `both_high` and `both_low` get
-    /// the paper's matrices (eqs. 5-9) as reference; other names have none.
+    /// Case name; `gaussian`, `corr_high`, `corr_low`, `both_high`, `both_low` get the
+    /// paper's matrices (eqs. 5-9) as reference, other names none.
+    ///
+    /// Range: non-empty, `[A-Za-z0-9_-]`, unique.
     pub name: String,
-    /// White Gaussian range and depth noise on/off.
+    /// White Gaussian range and depth noise on or off.
     pub gaussian: bool,
-    /// Common-mode range noise sigma, m (0 = none).
+    /// Common-mode range noise σ_c (0 = none; paper: 0.2 high, 0.05 low).
+    ///
+    /// Unit: m. Range: ≥ 0; not 0 when `gaussian = false`.
     pub corr_sigma_m: f64,
 }
 

@@ -66,17 +66,22 @@ pub(super) fn report_section(r: &PlazaReplay) -> String {
     }
 
     md.push_str("### What the ranges are like (measured against ground truth)\n\n");
+    // The two parts of the fitted range error at the median true distance.
+    let mut dists: Vec<f64> = a.samples.iter().map(|x| x.1).collect();
+    dists.sort_by(f64::total_cmp);
+    let d_median = dists.get(dists.len() / 2).copied().unwrap_or(0.0);
+    let scale_part = a.fit.1 * d_median;
+    let mostly_scaled = scale_part.abs() > a.fit.0.abs();
+    let gaussian_residuals = a.fit_kurtosis < 4.0;
     md.push_str(&format!(
         "Over the {} ranges inside the ground-truth span, `range - true distance` has mean \
-         {} m, std {} m, median {} m, robust sigma (1.4826 MAD) {} m, min {} m, max {} m. \
-         Against a constant bias this looks like a wide, skewed error. It is not: the error \
-         grows with distance. A least-squares line gives `error = {} + {} d` (a {} % scale \
-         error, almost no constant offset), and around that line the residuals have std \
-         {} m, kurtosis {} (3 for a Gaussian) and {} % of them lie beyond 3 std. Per beacon \
-         the median error is {}. So this log's ranges are mostly *scaled*, and the apparent \
-         heavy tail of the error against a constant offset comes from the spread of \
-         distances, not from outliers. The filters never see these numbers: they are \
-         only used here to judge what the filters learn.\n\n",
+         {} m, std {} m, median {} m, robust sigma (1.4826 MAD) {} m, min {} m, max {} m. A \
+         least-squares line gives `error = {} + {} d` (a {} % scale error): at the median \
+         true distance {} m the scale part is {} m and the constant part {} m, so the error \
+         is mostly {}. Around that line the residuals have std {} m, kurtosis {} (3 for a \
+         Gaussian) and {} % of them lie beyond 3 std{}. Per beacon the median error is {}. \
+         The filters never see these numbers: they are only used here to judge what the \
+         filters learn.\n\n",
         a.n,
         f(a.mean, 3),
         f(a.std, 3),
@@ -87,9 +92,23 @@ pub(super) fn report_section(r: &PlazaReplay) -> String {
         f(a.fit.0, 3),
         f(a.fit.1, 4),
         f(100.0 * a.fit.1, 2),
+        f(d_median, 1),
+        f(scale_part, 3),
+        f(a.fit.0, 3),
+        if mostly_scaled {
+            "a scale error"
+        } else {
+            "a constant offset"
+        },
         f(a.fit_std, 3),
         f(a.fit_kurtosis, 2),
         f(100.0 * a.fit_beyond_3sigma, 2),
+        if gaussian_residuals {
+            ": close to Gaussian once the line is removed, so the apparent heavy tail of the \
+             error against a constant offset comes from the spread of distances"
+        } else {
+            ": heavier-tailed than a Gaussian even after the line is removed (outliers)"
+        },
         a.per_beacon
             .iter()
             .map(|(id, n, m)| format!("id {id}: {} m (n = {n})", f(*m, 2)))
@@ -202,25 +221,25 @@ pub(super) fn report_section(r: &PlazaReplay) -> String {
     ));
     md.push('\n');
     md.push_str(&ablation_text(r));
+    let span = p.eval.last().map_or(1.0, |e| e.0);
+    let per_second = p.ranges.len() as f64 / span;
+    let per_epoch = per_second * s.epoch;
     md.push_str(&format!(
-        "\nSC uses the full range covariance with common-mode sigma {} m; with the \
-         calibration states carrying the common error this is set to 0 and SC's stacked \
-         update equals SI's sequential one. On this log ranges arrive one at a time (about \
-         {} per second, a beacon every ~{} s), so an epoch of {} s rarely holds more than \
-         one range and the three schemes differ mainly in when a range is applied (its own \
-         stamp for AS, the next epoch for SC/SI). \"superseded\" counts SC/SI ranges replaced by a \
+        "\nSC uses the full range covariance with common-mode sigma {} m (0 makes SC's \
+         stacked update equal SI's sequential one). On this log ranges arrive at about {} per \
+         second, {} per {} s epoch on average, so the schemes differ {} (its own stamp for \
+         AS, the next epoch for SC/SI). \"superseded\" counts SC/SI ranges replaced by a \
          newer range of the same beacon in the same epoch window (paper B's rule: the newest \
          sample per sensor and epoch).\n",
         s.correlation_sigma,
-        f(
-            p.ranges.len() as f64 / p.eval.last().map_or(1.0, |e| e.0),
-            2
-        ),
-        f(
-            p.eval.last().map_or(1.0, |e| e.0) / p.ranges.len().max(1) as f64,
-            2
-        ),
+        f(per_second, 2),
+        f(per_epoch, 2),
         s.epoch,
+        if per_epoch < 1.0 {
+            "mainly in when a range is applied"
+        } else {
+            "in how the ranges of an epoch are combined and when they are applied"
+        },
     ));
     md
 }
@@ -265,9 +284,8 @@ fn ablation_text(r: &PlazaReplay) -> String {
     if let (Some(full), Some(hg)) = (get(""), get("hard-gate")) {
         md.push_str(&format!(
             "- **Robust handling, calibrated ranges.** Hard gating only: mean {} m, max {} m, \
-             {} ranges rejected; robust: {} m / {} m, {} rejected, {} down-weighted. Once \
-             the calibration is learned the residuals are close to Gaussian, so both treat \
-             almost all ranges alike.\n",
+             {} ranges rejected; robust: {} m / {} m, {} rejected, {} down-weighted; the \
+             robust filter's mean error is {} the hard gate's.\n",
             f(hg.stats.mean, 3),
             f(hg.stats.max, 3),
             hg.rejected,
@@ -275,6 +293,11 @@ fn ablation_text(r: &PlazaReplay) -> String {
             f(full.stats.max, 3),
             full.rejected,
             full.downweighted,
+            if full.stats.mean < hg.stats.mean {
+                "below"
+            } else {
+                "not below"
+            },
         ));
     }
     if let (Some(nb), Some(nbhg)) = (get("no-bias"), get("no-bias-hard-gate")) {
@@ -282,9 +305,8 @@ fn ablation_text(r: &PlazaReplay) -> String {
             "- **Robust handling, biased ranges.** Without calibration the ranges disagree \
              with the state by metres, and the hard gate rejects {} ranges (mean error {} m, \
              max {} m); the robust filter down-weights {} and rejects {} ({} recoveries), \
-             mean {} m, max {} m. This is the situation robust handling is for: a model that \
-             does not fit (or a filter that has drifted) must still take information from \
-             the measurements instead of locking itself out.\n",
+             mean {} m, max {} m: with a model that does not fit, robust handling {} than \
+             hard gating here.\n",
             nbhg.rejected,
             f(nbhg.stats.mean, 3),
             f(nbhg.stats.max, 3),
@@ -293,6 +315,11 @@ fn ablation_text(r: &PlazaReplay) -> String {
             nb.recoveries,
             f(nb.stats.mean, 3),
             f(nb.stats.max, 3),
+            if nb.stats.mean < nbhg.stats.mean {
+                "does better"
+            } else {
+                "does not do better"
+            },
         ));
     }
     md

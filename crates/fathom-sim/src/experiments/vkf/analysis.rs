@@ -2,7 +2,7 @@
 //! scale-factor and bias errors, the INS-DVL error growth, the literal-bias batch,
 //! the rows and the claims.
 
-use fathom_stats::{Quartiles, mean_ci, paired_mean_ci, rms};
+use fathom_stats::{Quartiles, mean_and_ci95, paired_mean_ci, rms};
 
 use super::Prepared;
 use super::sim::{GATED, INS_DVL, METHODS, PINS, RunOutput, VKF};
@@ -10,12 +10,6 @@ use super::{figures, report};
 use crate::SimError;
 use crate::experiment::Analysis;
 use crate::output::{Claim, Row, fixed as f};
-
-/// Mean and 95 % CI (the mean twice when the CI is undefined).
-fn stat(values: &[f64]) -> Result<(f64, [f64; 2]), SimError> {
-    let m = mean_ci(values)?;
-    Ok((m.mean, m.bounds()))
-}
 
 /// RMS of a series (0 for an empty one).
 fn rms_of(v: &[f64]) -> f64 {
@@ -142,7 +136,7 @@ pub(super) fn analyse(
             ("rms_h", &all[m].rms_h),
             ("rms_vel", &all[m].rms_vel),
         ] {
-            let (mean, ci) = stat(values)?;
+            let (mean, ci) = mean_and_ci95(values)?;
             out.row(
                 Row::new(*name, metric, mean)
                     .with_paper(None)
@@ -169,8 +163,8 @@ pub(super) fn analyse(
         if sf.len() < 2 {
             continue;
         }
-        let (sf_m, sf_ci) = stat(&sf)?;
-        let (b_m, b_ci) = stat(&b)?;
+        let (sf_m, sf_ci) = mean_and_ci95(&sf)?;
+        let (b_m, b_ci) = mean_and_ci95(&b)?;
         out.row(
             Row::new("VKF", format!("sf_error_pct_{}", i + 1), sf_m)
                 .with_paper(None)
@@ -202,8 +196,8 @@ pub(super) fn analyse(
         .collect();
     let r_in: Vec<f64> = rates.iter().map(|r| r.0).collect();
     let r_out: Vec<f64> = rates.iter().map(|r| r.1).collect();
-    let (rin_m, rin_ci) = stat(&r_in)?;
-    let (rout_m, rout_ci) = stat(&r_out)?;
+    let (rin_m, rin_ci) = mean_and_ci95(&r_in)?;
+    let (rout_m, rout_ci) = mean_and_ci95(&r_out)?;
     out.row(Row::new("INS-DVL", "growth_rate_invalid", rin_m).with_ci95(rin_ci[0], rin_ci[1]));
     out.row(Row::new("INS-DVL", "growth_rate_valid", rout_m).with_ci95(rout_ci[0], rout_ci[1]));
 
@@ -215,13 +209,13 @@ pub(super) fn analyse(
         for (m, name) in METHODS.iter().enumerate() {
             let lm = metrics(literal, m);
             let dm = metrics(&runs[..literal.len()], m);
-            let (fm, fci) = stat(&lm.final_h)?;
-            let (rm, rci) = stat(&lm.rms_h)?;
+            let (fm, fci) = mean_and_ci95(&lm.final_h)?;
+            let (rm, rci) = mean_and_ci95(&lm.rms_h)?;
             let label = format!("{name} [b=0.5 m/s]");
             out.row(Row::new(&label, "final_h", fm).with_ci95(fci[0], fci[1]));
             out.row(Row::new(&label, "rms_h", rm).with_ci95(rci[0], rci[1]));
-            let (dfm, _) = stat(&dm.final_h)?;
-            let (drm, _) = stat(&dm.rms_h)?;
+            let (dfm, _) = mean_and_ci95(&dm.final_h)?;
+            let (drm, _) = mean_and_ci95(&dm.rms_h)?;
             lit_finals.push((dfm, fm));
             literal_table.push(vec![
                 (*name).to_string(),
@@ -237,7 +231,7 @@ pub(super) fn analyse(
             .collect();
         if b.len() >= 2 {
             lit_b_rms = rms_of(&b);
-            let (bm, bci) = stat(&b)?;
+            let (bm, bci) = mean_and_ci95(&b)?;
             out.row(Row::new("VKF [b=0.5 m/s]", "bias_error_1", bm).with_ci95(bci[0], bci[1]));
         }
     }

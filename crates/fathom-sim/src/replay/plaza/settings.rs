@@ -2,28 +2,36 @@
 //! [`PlazaSettings`], and the filter variants the settings ask for.
 
 use fathom_estimators::{schemes::UpdateScheme, wheel_odometry::WheelOdometryParams};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::SimError;
 use crate::data::plaza::RangeOrder;
 use crate::scenario::{require_non_negative, require_positive};
 
-/// The `plaza.toml` settings file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Range-beacon localization on real data.
+///
+/// The CMU Plaza1 log (real odometry, ranges and ground truth): wheel-odometry EKF with
+/// range offset/scale states, robust gating under AS / SC / SI, and ablations. One
+/// deterministic replay, no Monte Carlo (so no `runs` or `base_seed`). The same file
+/// configures `fathom replay plaza <dir> [--config FILE]`. Preset:
+/// `scenarios/plaza.toml` (also the built-in settings of `fathom replay plaza`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct PlazaToml {
-    /// The experiment this scenario is for: must be `"plaza"` (lets `fathom run`
-    /// pick the experiment from the file).
+    /// The experiment this file is for.
+    ///
+    /// Range: `"plaza"`.
     pub experiment: String,
     /// Where the data is and how to read it.
     pub data: DataToml,
     /// Initial pose uncertainty.
     pub initial: InitialToml,
-    /// Odometry noise.
+    /// Wheel-odometry noise, growing with distance and angle.
     pub odometry: OdometryToml,
-    /// Range noise and calibration.
+    /// Range noise and calibration states.
     pub ranges: RangesToml,
-    /// Outlier handling.
+    /// Outlier handling that cannot lock the filter out.
     pub robust: RobustToml,
     /// Update schemes.
     pub schemes: SchemesToml,
@@ -32,91 +40,138 @@ pub struct PlazaToml {
 }
 
 /// `[data]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DataToml {
-    /// Data folder for `cargo xtask paper` and `fathom run`: an absolute path, or a
-    /// relative one looked up inside the workspace root (for `fathom run` the current
-    /// directory), then beside each of its ancestors, nearest first. `fathom replay plaza
-    /// <dir>` ignores it.
+    /// The data folder for `cargo xtask paper` and `fathom run`: an absolute path, or a
+    /// relative one looked up inside the workspace root (`fathom run`: the current
+    /// directory), then beside each of its ancestors, nearest first; the experiment is
+    /// skipped when it is not found. `fathom replay plaza <dir>` ignores it.
+    ///
+    /// Range: a path.
     pub dir: String,
-    /// `"sort"` or `"strict"` ([`RangeOrder`]).
+    /// Range rows whose time goes backwards: sort them by time (stable) and report the
+    /// lines, or refuse the file.
+    ///
+    /// Range: `"sort"` or `"strict"`.
     pub range_order: String,
 }
 
 /// `[initial]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct InitialToml {
-    /// Initial position sigma per axis, m.
+    /// Position σ per axis (the position is the first ground-truth row).
+    ///
+    /// Unit: m. Range: > 0.
     pub position_sigma_m: f64,
-    /// Initial heading sigma, rad.
+    /// Heading σ (the heading is the first row of the data set's dead-reckoned path).
+    ///
+    /// Unit: rad. Range: > 0.
     pub heading_sigma_rad: f64,
 }
 
 /// `[odometry]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct OdometryToml {
-    /// Distance error, m/sqrt(m).
+    /// Distance error: `var(dd) = s_d² abs(dd)`.
+    ///
+    /// Unit: m/√m. Range: ≥ 0.
     pub distance_sigma_per_sqrt_m: f64,
-    /// Heading error per distance, rad/sqrt(m).
+    /// Heading error per distance driven: `var(dθ) = s_hm² abs(dd) + s_hr² abs(dθ)`.
+    ///
+    /// Unit: rad/√m. Range: ≥ 0.
     pub heading_sigma_per_sqrt_m: f64,
-    /// Heading error per angle turned, rad/sqrt(rad).
+    /// Heading error per angle turned (`s_hr` above).
+    ///
+    /// Unit: rad/√rad. Range: ≥ 0.
     pub heading_sigma_per_sqrt_rad: f64,
 }
 
 /// `[ranges]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RangesToml {
-    /// White range noise sigma, m.
+    /// White range noise σ.
+    ///
+    /// Unit: m. Range: > 0.
     pub sigma_m: f64,
-    /// Common-mode correlation sigma between beacons, m: SC's off-diagonal R, and
-    /// added to every range's variance (`sigma_m^2 + correlation_sigma_m^2`) in all
-    /// schemes.
+    /// Common-mode σ between beacons sampled together: SC's off-diagonal R; it also
+    /// adds to every range's variance (σ² + this²) in all schemes.
+    ///
+    /// Unit: m. Range: ≥ 0.
     pub correlation_sigma_m: f64,
-    /// `"none"`, `"offset"` or `"affine"` ([`Calibration`]).
+    /// Range model of the main runs: `h = d`, `h = d + o` or `h = (1 + s) d + o` (d =
+    /// distance, o and s filter states from a zero prior).
+    ///
+    /// Range: `"none"`, `"offset"` or `"affine"`.
     pub calibration: String,
-    /// Prior sigma of the range offset (prior mean 0), m.
+    /// Prior σ of the offset o (mean 0).
+    ///
+    /// Unit: m. Range: > 0.
     pub offset_prior_sigma_m: f64,
-    /// Prior sigma of the range scale error (prior mean 0).
+    /// Prior σ of the scale error s (mean 0).
+    ///
+    /// Range: > 0.
     pub scale_prior_sigma: f64,
-    /// Random walk of the offset, m/sqrt(s).
+    /// Random walk of o.
+    ///
+    /// Unit: m/√s. Range: ≥ 0.
     pub offset_random_walk_m_per_sqrt_s: f64,
-    /// Random walk of the scale error, 1/sqrt(s).
+    /// Random walk of s.
+    ///
+    /// Unit: 1/√s. Range: ≥ 0.
     pub scale_random_walk_per_sqrt_s: f64,
 }
 
 /// `[robust]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RobustToml {
-    /// Huber threshold on the normalized innovation.
+    /// Huber threshold k: a range with normalized innovation e = abs(ν)/√S > k is
+    /// applied with its variance multiplied by e/k.
+    ///
+    /// Unit: innovation σ. Range: > 0.
     pub huber_k: f64,
-    /// Hard rejection threshold, innovation sigmas.
+    /// Hard rejection beyond this many innovation σ (gross errors only).
+    ///
+    /// Unit: innovation σ. Range: ≥ `huber_k`.
     pub reject_sigma: f64,
-    /// Consecutive rejected or down-weighted ranges before covariance inflation.
+    /// After this many consecutive rejected or down-weighted ranges (overall, or of one
+    /// beacon) the state covariance is inflated.
+    ///
+    /// Range: ≥ 1.
     pub recovery_after: usize,
-    /// Covariance inflation factor.
+    /// The factor on the whole state covariance, so the gate opens again.
+    ///
+    /// Range: > 1.
     pub recovery_inflation: f64,
 }
 
 /// `[schemes]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SchemesToml {
-    /// Sync epoch period of SC / SI, s.
+    /// Sync epoch period of SC and SI (paper B's AS / SC / SI reading).
+    ///
+    /// Unit: s. Range: > 0.
     pub epoch_s: f64,
 }
 
 /// `[ablation]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AblationToml {
-    /// `"AS"`, `"SC"` or `"SI"`.
+    /// The scheme of the ablation runs (no calibration, offset only when `calibration =
+    /// "affine"`, hard gating only, both).
+    ///
+    /// Range: `"AS"`, `"SC"` or `"SI"`.
     pub scheme: String,
-    /// Gate of the hard-gating-only variant, innovation sigmas.
+    /// Gate of the "hard gating only" ablations: paper B's eq. (10) gate, no Huber, no
+    /// recovery.
+    ///
+    /// Unit: innovation σ. Range: > 0.
     pub hard_gate_sigma: f64,
 }
 
