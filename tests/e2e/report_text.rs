@@ -60,6 +60,45 @@ fn beacons_report_follows_t_gap_layout_and_the_computed_winner() {
 }
 
 #[test]
+fn beacons_geometry_statement_follows_the_rows() {
+    let text = preset("beacons.toml")
+        .replace("runs = 100", "runs = 4")
+        .replace("duration_s = 180.0", "duration_s = 30.0")
+        .replace("outlier_count = 276", "outlier_count = 20");
+    let (s, report) = run("report-geometry", "beacons", &text);
+    // A layout is consistent with Table 13 when every scheme's paper mean lies in the
+    // reproduced 95 % CI (the rows carry the paper value and the CI).
+    let consistent = |suffix: &str| {
+        ["AS", "SC", "SI"].iter().all(|scheme| {
+            let row = s.row(&format!("{scheme}/high{suffix}"), "mean").unwrap();
+            let [lo, hi] = row.ci95.unwrap();
+            let p = row.paper.unwrap();
+            lo <= p && p <= hi
+        })
+    };
+    let mut expected: Vec<String> = Vec::new();
+    if consistent("") {
+        expected.push("`scenario`".into());
+    }
+    for layout in ["one_sided", "coplanar", "far"] {
+        if consistent(&format!("@{layout}")) {
+            expected.push(format!("`{layout}`"));
+        }
+    }
+    let expected = if expected.is_empty() {
+        "none".to_string()
+    } else {
+        expected.join(", ")
+    };
+    assert!(
+        report.contains(&format!(
+            "Layouts whose 95 % CIs contain all three: {expected}."
+        )),
+        "expected {expected}\n{report}"
+    );
+}
+
+#[test]
 fn noise_report_states_the_scenarios_t_gap_and_bias() {
     let text = preset("noise.toml")
         .replace("runs = 200", "runs = 4")
@@ -96,7 +135,9 @@ fn fusion_report_names_the_filters_above_the_turn_ratio_limit() {
     let (s, report) = run("report-fusion", "fusion", &text);
     let line = report
         .lines()
-        .find(|l| l.starts_with("Filters whose mean turn ratio exceeds the limit 0.5:"))
+        .find(|l| {
+            l.starts_with("Filters whose mean turn ratio exceeds the limit 0.5 under `bar_shalom`:")
+        })
         .unwrap_or_else(|| panic!("{report}"));
     for m in ["MF", "T2T", "EFF"] {
         let above = value(&s, m, "turn_ratio_3d") > 0.5;

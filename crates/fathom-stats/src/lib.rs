@@ -55,6 +55,7 @@ pub mod error;
 pub mod error_series;
 pub mod histogram;
 pub mod monte_carlo;
+pub mod proportion;
 pub mod quantile;
 pub mod run_stats;
 pub mod sample;
@@ -74,6 +75,7 @@ pub use histogram::Histogram;
 pub use monte_carlo::{
     AggregateRow, Aggregator, MeanCi, MeanInterval, mean_and_ci95, mean_ci, mean_interval,
 };
+pub use proportion::{MedianCi, Proportion, clopper_pearson, median_ci};
 pub use quantile::{chi2_cdf, chi2_quantile, normal_quantile, student_t_quantile};
 pub use run_stats::RunStats;
 pub use sample::{Quartiles, median, paired_mean_ci, quantile, rms};

@@ -55,7 +55,8 @@ impl Experiment for Beacons {
     type Scenario = BeaconsScenario;
     type Checked = Checked;
     type Prepared = Checked;
-    /// Per case, per scheme (AS, SC, SI): the run's statistics.
+    /// Per case, per scheme (AS, SC, SI): the run's statistics (a layout batch has
+    /// the main case only).
     type Record = Vec<Vec<SchemeStats>>;
 
     const NAME: &'static str = "beacons";
@@ -73,17 +74,27 @@ impl Experiment for Beacons {
     }
 
     fn batches(&self, checked: &Checked) -> Vec<Batch> {
-        vec![Batch::new(Self::NAME, checked.runs)]
+        let mut b = vec![Batch::new(Self::NAME, checked.runs)];
+        for layout in &checked.layouts {
+            b.push(Batch::new(
+                format!("beacons: layout {}", layout.name),
+                checked.runs,
+            ));
+        }
+        b
     }
 
     fn run(
         &self,
         checked: &Checked,
-        _batch: usize,
+        batch: usize,
         _index: usize,
         rng: &mut ChaCha8Rng,
     ) -> Result<Self::Record, SimError> {
-        run::one_run(checked, rng)
+        match batch {
+            0 => run::one_run(checked, rng),
+            layout => run::one_layout_run(checked, layout - 1, rng),
+        }
     }
 
     fn analyse(
@@ -92,7 +103,8 @@ impl Experiment for Beacons {
         mut records: Vec<Vec<Self::Record>>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
+        let layouts = records.split_off(1);
         let per_run = records.swap_remove(0);
-        analysis::analyse(checked, &per_run, out)
+        analysis::analyse(checked, &per_run, &layouts, out)
     }
 }

@@ -8,7 +8,7 @@ use fathom_traj::velocity_command::VelocityCommandMotion;
 use rand_chacha::ChaCha8Rng;
 
 use super::filter::{SchemeRun, events, run_scheme_on};
-use super::scenario::Checked;
+use super::scenario::{Case, Checked};
 use crate::SimError;
 use crate::experiments::common::generate_motion;
 
@@ -19,11 +19,21 @@ pub(super) struct RunDetail {
 }
 
 pub(super) fn simulate_run(checked: &Checked, rng: &mut ChaCha8Rng) -> Result<RunDetail, SimError> {
+    simulate_cases(checked, &checked.cases, rng)
+}
+
+/// [`simulate_run`] on `cases` (the scenario's, or one beacon layout of the geometry
+/// sensitivity): the same motion, initial error and noise streams for every case.
+fn simulate_cases(
+    checked: &Checked,
+    cases_to_run: &[Case],
+    rng: &mut ChaCha8Rng,
+) -> Result<RunDetail, SimError> {
     let motion = generate_motion(&checked.motion, rng)?;
     // The initial error uses P0 of the first case (P0 does not depend on the case).
     let initial_error = checked.cases[0].setup.draw_initial_error(rng);
-    let mut cases = Vec::with_capacity(checked.cases.len());
-    for case in &checked.cases {
+    let mut cases = Vec::with_capacity(cases_to_run.len());
+    for case in cases_to_run {
         let mut case_rng = rng.clone();
         let data = simulate_beacon_suite(&motion, &case.config, &mut case_rng)
             .map_err(|e| SimError::model(format!("sensor suite, case {}", case.name), e))?;
@@ -57,7 +67,20 @@ pub(super) fn one_run(
     checked: &Checked,
     rng: &mut ChaCha8Rng,
 ) -> Result<Vec<Vec<SchemeStats>>, SimError> {
-    let detail = simulate_run(checked, rng)?;
+    stats_of(simulate_run(checked, rng)?)
+}
+
+/// One run of the main case under beacon layout `layout` of the geometry sensitivity.
+pub(super) fn one_layout_run(
+    checked: &Checked,
+    layout: usize,
+    rng: &mut ChaCha8Rng,
+) -> Result<Vec<Vec<SchemeStats>>, SimError> {
+    let case = std::slice::from_ref(&checked.layouts[layout].case);
+    stats_of(simulate_cases(checked, case, rng)?)
+}
+
+fn stats_of(detail: RunDetail) -> Result<Vec<Vec<SchemeStats>>, SimError> {
     detail
         .cases
         .into_iter()

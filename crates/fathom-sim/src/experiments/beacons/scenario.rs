@@ -47,6 +47,10 @@ pub struct BeaconsScenario {
     pub ekf: EkfToml,
     /// Figure settings.
     pub figures: FiguresToml,
+    /// Further beacon layouts, each run on the main case with the same random numbers
+    /// (the geometry sensitivity: the paper gives no layout).
+    #[serde(default)]
+    pub geometry: Vec<GeometryToml>,
     /// Sensor configurations (Table 13 is `high`).
     pub cases: Vec<CaseToml>,
 }
@@ -172,6 +176,20 @@ pub enum TimingKind {
     Sync,
 }
 
+/// One beacon layout of the geometry sensitivity.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GeometryToml {
+    /// Layout name (in the method names of its rows, `AS/high@name`).
+    ///
+    /// Range: non-empty, `[A-Za-z0-9_-]`, unique.
+    pub name: String,
+    /// Beacon positions `[north, east, down]` of the layout.
+    ///
+    /// Unit: m (NED). Range: finite, at least one beacon.
+    pub positions: Vec<[f64; 3]>,
+}
+
 /// `[[cases]]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -203,9 +221,18 @@ pub struct Case {
     pub(super) setup: FilterSetup,
 }
 
+/// A checked beacon layout: the main case with the layout's beacons.
+#[derive(Debug, Clone)]
+pub struct Layout {
+    pub(super) name: String,
+    pub(super) case: Case,
+}
+
 /// The checked scenario.
 #[derive(Debug, Clone)]
 pub struct Checked {
+    /// The geometry sensitivity's layouts.
+    pub(super) layouts: Vec<Layout>,
     pub(super) runs: usize,
     pub(super) base_seed: u64,
     pub(super) motion: VelocityCommandParams,
@@ -216,6 +243,61 @@ pub struct Checked {
 }
 
 impl BeaconsScenario {
+    /// The layouts of `[[geometry]]`, each the main case with its own beacons.
+    fn check_layouts(
+        &self,
+        file: &str,
+        cases: &[Case],
+        settings: &EkfSettings,
+        motion: &VelocityCommandParams,
+    ) -> Result<Vec<Layout>, SimError> {
+        let Some(main) = cases.iter().find(|c| c.name == MAIN_CASE) else {
+            return Ok(Vec::new());
+        };
+        let mut out = Vec::with_capacity(self.geometry.len());
+        for (k, g) in self.geometry.iter().enumerate() {
+            let key = format!("geometry[{k}]");
+            check_case_name(
+                file,
+                k,
+                &g.name,
+                self.geometry[..k].iter().map(|g| g.name.as_str()),
+            )
+            .map_err(|_| {
+                SimError::invalid(
+                    file,
+                    format!("{key}.name"),
+                    format!(
+                        "must be a non-empty, unique name of [A-Za-z0-9_-], got {:?}",
+                        g.name
+                    ),
+                )
+            })?;
+            let beacons = BeaconsToml {
+                positions: g.positions.clone(),
+            }
+            .to_positions(file, &key)?;
+            let params = BeaconSuiteParams {
+                beacons_in_nav: beacons,
+                ..main.config.params().clone()
+            };
+            let config = params
+                .check()
+                .map_err(|e| SimError::invalid(file, key.clone(), e.to_string()))?;
+            let setup = FilterSetup::new(settings, &config, motion)
+                .map_err(|e| SimError::invalid(file, key.clone(), crate::error_chain(&e)))?;
+            out.push(Layout {
+                name: g.name.clone(),
+                case: Case {
+                    name: MAIN_CASE.to_string(),
+                    config,
+                    setup,
+                },
+            });
+        }
+        Ok(out)
+    }
+
     /// Validates the scenario (`file` labels errors).
     ///
     /// # Errors
@@ -360,12 +442,14 @@ impl BeaconsScenario {
                 setup,
             });
         }
+        let layouts = self.check_layouts(file, &cases, &settings, &motion)?;
         Ok(Checked {
             runs,
             base_seed: self.base_seed,
             motion,
             figure_run: self.figures.run,
             corr_gap: n.corr_gap_s,
+            layouts,
             cases,
         })
     }

@@ -7,7 +7,7 @@ use rand_chacha::ChaCha8Rng;
 
 use super::Prepared;
 use super::scenario::FusionSetup;
-use super::sim::{self, Method, MethodMetrics, RunConfig, RunOutput, method_metrics};
+use super::sim::{self, Method, MethodMetrics, Reading, RunConfig, RunOutput, method_metrics};
 use super::{figures, report};
 use crate::SimError;
 use crate::experiment::Analysis;
@@ -109,6 +109,8 @@ pub(super) const SWEEP_METHODS: [Method; 6] = [
 
 /// One sweep: per value, per method, mean 3D error and its CI.
 pub(super) struct SweepResult {
+    /// The tuning reading of the sweep's runs.
+    pub(super) reading: Reading,
     pub(super) key: &'static str,
     pub(super) label: &'static str,
     pub(super) values: Vec<f64>,
@@ -123,19 +125,23 @@ fn values_of_mean(results: &[RunResult], m: Method) -> Vec<f64> {
 /// The two sensitivity sweeps: the scenario key and the axis label of each.
 pub(super) const SWEEPS: [(&str, &str); 2] = [
     ("dvl_vel_noise_mps", "DVL velocity noise std (m/s)"),
-    ("filter_v_dvl_m", "filters' v_DVL (m)"),
+    ("filter_v_dvl", "filters' v_DVL"),
 ];
 
-/// The sweep results from the sweep batches' records (`records[1..]`, one batch per
-/// sweep value in the order of [`Prepared::sweep_points`]).
+/// The sweep results from the sweep batches' records (one batch per sweep point, in
+/// the order of [`Prepared::sweep_points`]): per reading, the sweeps of `SWEEPS`.
 fn sweep_results(p: &Prepared, records: &[Vec<RunResult>]) -> Result<Vec<SweepResult>, SimError> {
-    let mut out: Vec<SweepResult> = SWEEPS
+    let readings = [p.setup.run.tuning.reading, p.other.tuning.reading];
+    let mut out: Vec<SweepResult> = readings
         .iter()
-        .map(|&(key, label)| SweepResult {
-            key,
-            label,
-            values: Vec::new(),
-            means: Vec::new(),
+        .flat_map(|&reading| {
+            SWEEPS.iter().map(move |&(key, label)| SweepResult {
+                reading,
+                key,
+                label,
+                values: Vec::new(),
+                means: Vec::new(),
+            })
         })
         .collect();
     for (point, results) in p.sweep_points.iter().zip(records) {
@@ -143,11 +149,33 @@ fn sweep_results(p: &Prepared, records: &[Vec<RunResult>]) -> Result<Vec<SweepRe
             .iter()
             .map(|&m| mean_and_ci95(&values_of_mean(results, m)))
             .collect::<Result<Vec<_>, _>>()?;
-        let sw = &mut out[point.sweep];
+        let sw = &mut out[point.reading * SWEEPS.len() + point.sweep];
         sw.values.push(point.value);
         sw.means.push(row);
     }
     Ok(out)
+}
+
+/// One reading's main batch and sweeps, for the report.
+pub(super) struct ReadingRuns<'a> {
+    /// The reading.
+    pub(super) reading: Reading,
+    /// Its run configuration.
+    pub(super) cfg: &'a RunConfig,
+    /// Its main batch.
+    pub(super) results: &'a [RunResult],
+    /// Its sweeps.
+    pub(super) sweeps: Vec<&'a SweepResult>,
+}
+
+/// The method name of a summary row under `reading`: the contract name for the
+/// scenario's reading, `NAME [reading]` for the other one.
+pub(super) fn row_method(m: Method, reading: Reading, primary: Reading) -> String {
+    if reading == primary {
+        m.name().to_string()
+    } else {
+        format!("{} [{}]", m.name(), reading.name())
+    }
 }
 
 /// Computes the rows, the claims, the extra keys, the figures and the report.
@@ -157,8 +185,10 @@ pub(super) fn analyse(
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let (setup, mission) = (&p.setup, &p.mission);
-    let sweeps = sweep_results(p, &records[1..])?;
+    let sweeps = sweep_results(p, &records[super::FIRST_SWEEP..])?;
+    let other = std::mem::take(&mut records[super::OTHER]);
     let results = std::mem::take(&mut records[0]);
+    let primary = setup.run.tuning.reading;
     // Run 0 again, keeping the paths for the figures (same stream: same numbers).
     let run0 = run_once(
         setup,
@@ -168,15 +198,17 @@ pub(super) fn analyse(
         true,
         &mut run_rng(setup.base_seed, 0),
     )?;
-    for m in Method::ALL {
-        let paper = paper_values(m);
-        for (k, metric) in METRICS.iter().enumerate() {
-            let (mean, [lo, hi]) = mean_and_ci95(&values(&results, m, metric))?;
-            out.row(
-                Row::new(m.name(), *metric, mean)
-                    .with_paper(paper.and_then(|p| p.get(k).copied()))
-                    .with_ci95(lo, hi),
-            );
+    for (reading, runs) in [(primary, &results), (p.other.tuning.reading, &other)] {
+        for m in Method::ALL {
+            let paper = paper_values(m);
+            for (k, metric) in METRICS.iter().enumerate() {
+                let (mean, [lo, hi]) = mean_and_ci95(&values(runs, m, metric))?;
+                out.row(
+                    Row::new(row_method(m, reading, primary), *metric, mean)
+                        .with_paper(paper.and_then(|p| p.get(k).copied()))
+                        .with_ci95(lo, hi),
+                );
+            }
         }
     }
     // The INS integrator under EFF feedback (what the acceptance test bounds).
@@ -211,9 +243,24 @@ pub(super) fn analyse(
     );
     let sweep_refs: Vec<&SweepResult> = sweeps.iter().collect();
     out.extra("sensitivity", report::sweeps_json(&sweep_refs));
+    out.extra("primary_reading", serde_json::json!(primary.name()));
+    let readings = [
+        ReadingRuns {
+            reading: primary,
+            cfg: &setup.run,
+            results: &results,
+            sweeps: sweeps.iter().filter(|s| s.reading == primary).collect(),
+        },
+        ReadingRuns {
+            reading: p.other.tuning.reading,
+            cfg: &p.other,
+            results: &other,
+            sweeps: sweeps.iter().filter(|s| s.reading != primary).collect(),
+        },
+    ];
 
     figures::write_all(out, setup, mission, &results, &run0, &sweep_refs)?;
-    let section = report::section(setup, mission, &results, &sweep_refs)?;
+    let section = report::section(setup, mission, &readings)?;
     out.report(&section);
     Ok(())
 }

@@ -236,8 +236,10 @@ pub(super) fn write_all(
     for s in sweeps {
         let mut plot = LinePlot::new(
             format!(
-                "sensitivity: mean 3D error vs {} ({} runs per value)",
-                s.label, setup.sensitivity_runs
+                "sensitivity: mean 3D error vs {} ({} reading, {} runs per value)",
+                s.label,
+                s.reading.name(),
+                setup.sensitivity_runs
             ),
             format!("log10 {}", s.label),
             "mean 3D error (m)",
@@ -252,6 +254,7 @@ pub(super) fn write_all(
             plot.series.push(Series::new(m.name(), pts));
             for (v, row) in s.values.iter().zip(&s.means) {
                 sens_records.push(vec![
+                    CsvCell::from(s.reading.name()),
                     CsvCell::from(s.key),
                     CsvCell::from(*v),
                     CsvCell::from(m.name()),
@@ -261,11 +264,15 @@ pub(super) fn write_all(
                 ]);
             }
         }
-        out.figure(&format!("sensitivity_{}.svg", s.key), &plot)?;
+        out.figure(
+            &format!("sensitivity_{}_{}.svg", s.key, s.reading.name()),
+            &plot,
+        )?;
     }
     out.csv_records(
         "sensitivity.csv",
         &[
+            "reading",
             "sweep",
             "value",
             "method",

@@ -29,6 +29,8 @@ use crate::experiment::{Analysis, Batch, Environment, Experiment};
 /// One value of a sensitivity sweep and the run configuration it gives.
 #[derive(Debug, Clone)]
 pub struct SweepPoint {
+    /// 0: the scenario's reading, 1: the other reading.
+    reading: usize,
     /// Index into the sweeps (`analysis::SWEEPS`).
     sweep: usize,
     /// The swept value.
@@ -42,8 +44,15 @@ pub struct SweepPoint {
 pub struct Prepared {
     setup: FusionSetup,
     mission: FusionMission,
+    /// The run configuration under the other reading of the tuning (same sensors).
+    other: RunConfig,
     sweep_points: Vec<SweepPoint>,
 }
+
+/// Index of the other reading's main batch.
+const OTHER: usize = 1;
+/// Index of the first sweep batch.
+const FIRST_SWEEP: usize = 2;
 
 /// The `fusion` experiment.
 #[derive(Debug, Clone, Copy, Default)]
@@ -67,46 +76,62 @@ impl Experiment for Fusion {
 
     fn prepare(&self, setup: FusionSetup, _env: &Environment) -> Result<Prepared, SimError> {
         let mission = setup.mission()?;
+        let mut other = setup.run.clone();
+        other.tuning.reading = setup.run.tuning.reading.other();
         let mut sweep_points = Vec::new();
-        for &v in &setup.sweep_dvl_noise {
-            let dvl = DvlDrParams {
-                vel_noise_sigma: v,
-                ..setup.dvl_params
+        for (reading, base) in [&setup.run, &other].into_iter().enumerate() {
+            for &v in &setup.sweep_dvl_noise {
+                let dvl = DvlDrParams {
+                    vel_noise_sigma: v,
+                    ..setup.dvl_params
+                }
+                .check()
+                .map_err(|e| SimError::model("sensitivity DVL parameters", e))?;
+                sweep_points.push(SweepPoint {
+                    reading,
+                    sweep: 0,
+                    value: v,
+                    cfg: RunConfig {
+                        dvl,
+                        ..base.clone()
+                    },
+                });
             }
-            .check()
-            .map_err(|e| SimError::model("sensitivity DVL parameters", e))?;
-            sweep_points.push(SweepPoint {
-                sweep: 0,
-                value: v,
-                cfg: RunConfig {
-                    dvl,
-                    ..setup.run.clone()
-                },
-            });
-        }
-        for &v in &setup.sweep_v_dvl {
-            let mut cfg = setup.run.clone();
-            cfg.tuning.v_dvl = v;
-            sweep_points.push(SweepPoint {
-                sweep: 1,
-                value: v,
-                cfg,
-            });
+            for &v in &setup.sweep_v_dvl {
+                let mut cfg = base.clone();
+                cfg.tuning.v_dvl = v;
+                sweep_points.push(SweepPoint {
+                    reading,
+                    sweep: 1,
+                    value: v,
+                    cfg,
+                });
+            }
         }
         Ok(Prepared {
             setup,
             mission,
+            other,
             sweep_points,
         })
     }
 
     fn batches(&self, p: &Prepared) -> Vec<Batch> {
-        let mut b = vec![Batch::new(Self::NAME, p.setup.runs)];
+        let mut b = vec![
+            Batch::new(Self::NAME, p.setup.runs),
+            Batch::new(
+                format!("fusion: reading {}", p.other.tuning.reading.name()),
+                p.setup.runs,
+            ),
+        ];
         for point in &p.sweep_points {
+            let cfg = &point.cfg;
             b.push(Batch::new(
                 format!(
-                    "fusion: sensitivity {} = {}",
-                    SWEEPS[point.sweep].0, point.value
+                    "fusion: sensitivity {} = {} ({})",
+                    SWEEPS[point.sweep].0,
+                    point.value,
+                    cfg.tuning.reading.name()
                 ),
                 p.setup.sensitivity_runs,
             ));
@@ -121,11 +146,12 @@ impl Experiment for Fusion {
         _index: usize,
         rng: &mut ChaCha8Rng,
     ) -> Result<RunResult, SimError> {
-        match batch.checked_sub(1) {
-            None => run_once(&p.setup, &p.setup.run, &p.mission, &Method::ALL, false, rng),
-            Some(k) => run_once(
+        match batch {
+            0 => run_once(&p.setup, &p.setup.run, &p.mission, &Method::ALL, false, rng),
+            OTHER => run_once(&p.setup, &p.other, &p.mission, &Method::ALL, false, rng),
+            _ => run_once(
                 &p.setup,
-                &p.sweep_points[k].cfg,
+                &p.sweep_points[batch - FIRST_SWEEP].cfg,
                 &p.mission,
                 &SWEEP_METHODS,
                 false,

@@ -10,7 +10,7 @@ use rand_chacha::ChaCha8Rng;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::sim::{FilterTuning, RunConfig};
+use super::sim::{FilterTuning, Reading, RunConfig};
 use crate::SimError;
 use crate::scenario::{require_non_negative, require_positive};
 
@@ -145,26 +145,42 @@ pub struct DvlToml {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FiltersToml {
-    /// Process-noise scale w of the INS track (paper: 10).
+    /// How the paper's printed `w` and `v` are read: `"bar_shalom"` (the notation of
+    /// its references: `v` is the white-acceleration process noise, `w` the position
+    /// measurement noise; every printed unit consistent) or `"as_printed"` (`Q = w² I6`,
+    /// `R = v² I3`, with two unit repairs). The other reading runs too, with the same
+    /// seeds, and the report shows both.
     ///
-    /// Unit: m. Range: ≥ 0.
+    /// Range: `"bar_shalom"` or `"as_printed"`.
+    pub reading: String,
+    /// The paper's `w_INS` (10): the INS position σ (`bar_shalom`) or the INS track's
+    /// process-noise scale (`as_printed`).
+    ///
+    /// Unit: m. Range: > 0 (`bar_shalom`), ≥ 0 (`as_printed`).
     pub w_ins_m: f64,
-    /// Process-noise scale w of the DVL track (paper: 1).
+    /// The paper's `w_DVL` (1), read like `w_ins_m`.
     ///
-    /// Unit: m. Range: ≥ 0.
+    /// Unit: m. Range: as `w_ins_m`.
     pub w_dvl_m: f64,
-    /// σ of the INS position measurement (paper: "1 g ≈ 9.8 m/s²", read as 9.8 m).
+    /// The paper's `v_INS` ("1 g ≈ 9.8 m/s²"): the INS filter's white-acceleration σ,
+    /// m/s² (`bar_shalom`), or the INS position σ read as metres (`as_printed`).
     ///
-    /// Unit: m. Range: > 0.
-    pub v_ins_m: f64,
-    /// σ of the DVL position measurement (paper: "0.02 m/s²", read as 0.02 m).
+    /// Unit: m/s² or m (see the reading). Range: > 0.
+    pub v_ins: f64,
+    /// The paper's `v_DVL` ("0.02 m/s²"), read like `v_ins`.
     ///
-    /// Unit: m. Range: > 0.
-    pub v_dvl_m: f64,
-    /// Process-noise scale of the single MF filter (not given by the paper).
+    /// Unit: m/s² or m (see the reading). Range: > 0.
+    pub v_dvl: f64,
+    /// Process-noise scale of the single MF filter under `as_printed` (not given by the
+    /// paper).
     ///
     /// Unit: m. Range: ≥ 0.
     pub w_mf_m: f64,
+    /// White-acceleration σ of the single MF filter under `bar_shalom` (not given by the
+    /// paper; the preset uses the DVL filter's, the precise sensor's).
+    ///
+    /// Unit: m/s². Range: > 0.
+    pub mf_accel_sigma_mps2: f64,
     /// Initial position σ of every filter (not given by the paper).
     ///
     /// Unit: m. Range: > 0.
@@ -222,10 +238,10 @@ pub struct SensitivityToml {
     /// Unit: m/s. Range: ≥ 2 values, each > 0, strictly increasing.
     pub dvl_vel_noise_mps: Vec<f64>,
     /// The filters' `v_DVL` values of the second sweep (the sensors keep the scenario's
-    /// values).
+    /// values), in the unit of each reading (m/s² for `bar_shalom`, m for `as_printed`).
     ///
-    /// Unit: m. Range: ≥ 2 values, each > 0, strictly increasing.
-    pub filter_v_dvl_m: Vec<f64>,
+    /// Unit: see `filters.v_dvl`. Range: ≥ 2 values, each > 0, strictly increasing.
+    pub filter_v_dvl: Vec<f64>,
 }
 
 crate::monte_carlo_scenario!(FusionScenario);
@@ -261,7 +277,7 @@ pub struct FusionSetup {
     pub sensitivity_runs: usize,
     /// DVL noise sweep, m/s.
     pub sweep_dvl_noise: Vec<f64>,
-    /// `v_DVL` sweep, m.
+    /// `v_DVL` sweep (unit of the reading).
     pub sweep_v_dvl: Vec<f64>,
 }
 
@@ -367,12 +383,33 @@ impl FusionScenario {
             .map_err(|e| SimError::invalid(file, "dvl", e.to_string()))?;
 
         let f = &self.filters;
+        let reading = match f.reading.as_str() {
+            "bar_shalom" => Reading::BarShalom,
+            "as_printed" => Reading::AsPrinted,
+            other => {
+                return Err(SimError::invalid(
+                    file,
+                    "filters.reading",
+                    format!("must be \"bar_shalom\" or \"as_printed\", got {other:?}"),
+                ));
+            }
+        };
+        let w_check = |key: &str, v: f64| match reading {
+            Reading::BarShalom => require_positive(file, key, v),
+            Reading::AsPrinted => require_non_negative(file, key, v),
+        };
         let tuning = FilterTuning {
-            w_ins: require_non_negative(file, "filters.w_ins_m", f.w_ins_m)?,
-            w_dvl: require_non_negative(file, "filters.w_dvl_m", f.w_dvl_m)?,
-            v_ins: require_positive(file, "filters.v_ins_m", f.v_ins_m)?,
-            v_dvl: require_positive(file, "filters.v_dvl_m", f.v_dvl_m)?,
+            reading,
+            w_ins: w_check("filters.w_ins_m", f.w_ins_m)?,
+            w_dvl: w_check("filters.w_dvl_m", f.w_dvl_m)?,
+            v_ins: require_positive(file, "filters.v_ins", f.v_ins)?,
+            v_dvl: require_positive(file, "filters.v_dvl", f.v_dvl)?,
             w_mf: require_non_negative(file, "filters.w_mf_m", f.w_mf_m)?,
+            mf_accel_sigma: require_positive(
+                file,
+                "filters.mf_accel_sigma_mps2",
+                f.mf_accel_sigma_mps2,
+            )?,
             p0_pos: require_positive(file, "filters.initial_sigma_pos_m", f.initial_sigma_pos_m)?,
             p0_vel: require_positive(
                 file,
@@ -433,7 +470,7 @@ impl FusionScenario {
             // A quarter of the main batch, at most the scenario's `sensitivity.runs`.
             sensitivity_runs: runs.div_ceil(4).clamp(2, s.runs),
             sweep_dvl_noise: sweep(file, "sensitivity.dvl_vel_noise_mps", &s.dvl_vel_noise_mps)?,
-            sweep_v_dvl: sweep(file, "sensitivity.filter_v_dvl_m", &s.filter_v_dvl_m)?,
+            sweep_v_dvl: sweep(file, "sensitivity.filter_v_dvl", &s.filter_v_dvl)?,
         })
     }
 }
@@ -483,9 +520,9 @@ mod tests {
 
     #[test]
     fn bad_values_name_the_key() {
-        let text = scenario_text().replace("v_dvl_m = 0.02", "v_dvl_m = -0.02");
+        let text = scenario_text().replace("v_dvl = 0.02", "v_dvl = -0.02");
         let err = parse(&text).check("fusion.toml").unwrap_err().to_string();
-        assert!(err.contains("filters.v_dvl_m"), "{err}");
+        assert!(err.contains("filters.v_dvl"), "{err}");
         let text = scenario_text().replace("step_s = 1.0", "step_s = 0.3");
         let err = parse(&text).check("fusion.toml").unwrap_err().to_string();
         assert!(err.contains("mission.step_s"), "{err}");

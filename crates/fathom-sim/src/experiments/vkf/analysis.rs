@@ -2,7 +2,7 @@
 //! scale-factor and bias errors, the INS-DVL error growth, the literal-bias batch,
 //! the rows and the claims.
 
-use fathom_stats::{Quartiles, mean_and_ci95, paired_mean_ci, rms};
+use fathom_stats::{Quartiles, mean_and_ci95, median_ci, paired_mean_ci, rms};
 
 use super::Prepared;
 use super::sim::{GATED, INS_DVL, METHODS, PINS, RunOutput, VKF};
@@ -24,6 +24,15 @@ fn first_interval_bias_rms(runs: &[RunOutput]) -> f64 {
         .filter_map(|r| r.bias_error.first().copied())
         .collect();
     rms(&b).unwrap_or(f64::NAN)
+}
+
+/// Whether a per-run statistic is too heavy-tailed for the Student-t interval of its
+/// mean to mean much: the mean exceeds twice the median, or the interval reaches
+/// below zero although every value is non-negative.
+pub(super) fn is_heavy_tailed(values: &[f64]) -> Result<bool, SimError> {
+    let (mean, ci) = mean_and_ci95(values)?;
+    let median = fathom_stats::median(values)?;
+    Ok(mean > 2.0 * median || (ci[0] < 0.0 && values.iter().all(|&v| v >= 0.0)))
 }
 
 /// What the gated INS-DVL did.
@@ -144,6 +153,40 @@ pub(super) fn analyse(
             );
             cells.push(format!("{} [{}, {}]", f(mean, 2), f(ci[0], 2), f(ci[1], 2)));
         }
+        // The per-run final error is heavy-tailed for a method that loses lock in some
+        // runs: its median with the order-statistics interval, and how many runs end
+        // beyond the threshold, say more than the mean's t-interval.
+        let med = median_ci(&all[m].final_h, 0.95)?;
+        let mut row = Row::new(*name, "final_h_median", med.median);
+        if let Some([lo, hi]) = med.interval {
+            row = row.with_ci95(lo, hi);
+        }
+        out.row(row);
+        let beyond = all[m]
+            .final_h
+            .iter()
+            .filter(|&&v| v > c.final_h_threshold)
+            .count();
+        out.row(Row::new(
+            *name,
+            "runs_final_h_beyond_threshold",
+            beyond as f64,
+        ));
+        let heavy = is_heavy_tailed(&all[m].final_h)?;
+        cells.push(if heavy {
+            format!(
+                "median {} {}; {beyond} of {} runs > {} m",
+                f(med.median, 2),
+                med.interval.map_or(
+                    "(too few runs for a 95 % interval)".to_string(),
+                    |[lo, hi]| { format!("[{}, {}]", f(lo, 2), f(hi, 2)) }
+                ),
+                all[m].final_h.len(),
+                c.final_h_threshold
+            )
+        } else {
+            "—".to_string()
+        });
         table.push(cells);
     }
 
@@ -214,6 +257,9 @@ pub(super) fn analyse(
             let label = format!("{name} [b=0.5 m/s]");
             out.row(Row::new(&label, "final_h", fm).with_ci95(fci[0], fci[1]));
             out.row(Row::new(&label, "rms_h", rm).with_ci95(rci[0], rci[1]));
+            // Same run streams in both batches: the change is a paired difference.
+            let (dd, dci) = paired(&lm.final_h, &dm.final_h)?;
+            out.row(Row::new(&label, "final_h_minus_default", dd).with_ci95(dci[0], dci[1]));
             let (dfm, _) = mean_and_ci95(&dm.final_h)?;
             let (drm, _) = mean_and_ci95(&dm.rms_h)?;
             lit_finals.push((dfm, fm));
@@ -221,6 +267,7 @@ pub(super) fn analyse(
                 (*name).to_string(),
                 f(dfm, 1),
                 format!("{} [{}, {}]", f(fm, 1), f(fci[0], 1), f(fci[1], 1)),
+                format!("{:+.1} [{:+.1}, {:+.1}]", dd, dci[0], dci[1]),
                 f(drm, 1),
                 format!("{} [{}, {}]", f(rm, 1), f(rci[0], 1), f(rci[1], 1)),
             ]);

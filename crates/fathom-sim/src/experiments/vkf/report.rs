@@ -119,6 +119,7 @@ fn literal_section(p: &Prepared, t: &Tables) -> String {
             "method",
             "final_h (default bias)",
             "final_h (literal bias)",
+            "literal minus default, paired [95 % CI]",
             "rms_h (default bias)",
             "rms_h (literal bias)",
         ],

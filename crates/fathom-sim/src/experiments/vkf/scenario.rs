@@ -48,6 +48,12 @@ pub struct VkfScenario {
     ///
     /// Range: 0 or ≥ 2.
     pub literal_bias_runs: usize,
+    /// A run whose final horizontal error exceeds this counts in the rows
+    /// `runs_final_h_beyond_threshold` (a method that loses lock in some runs has a
+    /// heavy-tailed final error).
+    ///
+    /// Unit: m. Range: > 0.
+    pub final_h_threshold_m: f64,
     /// The route (paper §3.2).
     pub route: RouteToml,
     /// The seabed profile along the track.
@@ -428,6 +434,8 @@ pub struct Checked {
     pub gate: GateThreshold,
     pub gate_probability: f64,
     pub eskf_sigma0_att: f64,
+    /// `final_h_threshold_m`.
+    pub final_h_threshold: f64,
     /// The scenario as written (for the report's description of the setup).
     pub scenario: VkfScenario,
 }
@@ -677,6 +685,11 @@ impl VkfScenario {
             gate,
             gate_probability: n.gate_probability,
             eskf_sigma0_att,
+            final_h_threshold: require_positive(
+                file,
+                "final_h_threshold_m",
+                self.final_h_threshold_m,
+            )?,
             scenario: self.clone(),
         })
     }
