@@ -7,6 +7,7 @@
 mod support;
 
 mod beacons;
+mod campaign;
 mod cli;
 mod determinism;
 mod fusion;

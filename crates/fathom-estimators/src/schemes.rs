@@ -72,7 +72,7 @@ use fathom_core::{CoreError, Time, gaussian::SYMMETRY_TOLERANCE};
 use nalgebra::DMatrix;
 
 /// Which update scheme a [`SchemeFilter`] uses (module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum UpdateScheme {
     /// AS: every measurement at its own time stamp.
     Asynchronous,
@@ -250,7 +250,7 @@ impl<I, S> Event<I, S> {
 }
 
 /// What happened to a measurement.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Disposition {
     /// Passed the gate and was applied.
     Accepted,
@@ -285,7 +285,7 @@ pub struct Decision {
 }
 
 /// Per-channel counts of the dispositions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub struct ChannelCounts {
     /// Applied.
     pub accepted: usize,

@@ -10,6 +10,7 @@
 //!    (header, the side-by-side table, the claims, the experiment's notes, links to
 //!    the figures).
 
+pub mod campaign;
 mod paper;
 mod report;
 mod single_run;
@@ -76,7 +77,7 @@ pub fn execute_into(
     write_executed(&executed, job.file, out_dir, elapsed)
 }
 
-fn write_executed(
+pub(crate) fn write_executed(
     executed: &Executed,
     scenario_label: &str,
     out_dir: &Path,
@@ -104,6 +105,48 @@ fn write_executed(
         resolved_toml: executed.resolved.toml.clone(),
         skipped: executed.analysis.skipped.clone(),
     })
+}
+
+/// Writes a set of outputs into a fresh folder beside `out_dir` with `write`, then
+/// moves it into place (an existing `out_dir` is replaced only after the new one is
+/// complete), so an error or an interrupted write leaves `out_dir` as it was.
+///
+/// # Errors
+/// `write`'s errors, I/O errors.
+pub(crate) fn write_atomically<T>(
+    out_dir: &Path,
+    write: impl FnOnce(&Path) -> Result<T, SimError>,
+) -> Result<T, SimError> {
+    let name = out_dir
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "out".into());
+    let parent = out_dir.parent().filter(|p| !p.as_os_str().is_empty());
+    let sibling = |tag: &str| {
+        let n = format!(".{name}.{tag}-{}", std::process::id());
+        parent.map_or_else(|| PathBuf::from(&n), |p| p.join(&n))
+    };
+    let tmp = sibling("partial");
+    if tmp.exists() {
+        std::fs::remove_dir_all(&tmp).map_err(|e| SimError::io("remove", &tmp, e))?;
+    }
+    std::fs::create_dir_all(&tmp).map_err(|e| SimError::io("create directory", &tmp, e))?;
+    let value = match write(&tmp) {
+        Ok(v) => v,
+        Err(e) => {
+            let _ = std::fs::remove_dir_all(&tmp);
+            return Err(e);
+        }
+    };
+    let old = sibling("old");
+    if out_dir.exists() {
+        std::fs::rename(out_dir, &old).map_err(|e| SimError::io("move aside", out_dir, e))?;
+    }
+    std::fs::rename(&tmp, out_dir).map_err(|e| SimError::io("move into place", out_dir, e))?;
+    if old.exists() {
+        std::fs::remove_dir_all(&old).map_err(|e| SimError::io("remove", &old, e))?;
+    }
+    Ok(value)
 }
 
 /// Remove the outputs a previous run left directly in `dir`.

@@ -40,6 +40,8 @@ impl<const K: u8> Experiment for Dummy<K> {
     type Checked = DummyScenario;
     type Prepared = DummyScenario;
     type Record = f64;
+    type Kept = Self::Record;
+    type Fold = ();
     const NAME: &'static str = name_of(K);
     const SEED_DOC: &'static str = "seed.txt";
     const DEFAULT_SCENARIO: &'static str = match K {
@@ -74,10 +76,22 @@ impl<const K: u8> Experiment for Dummy<K> {
         Ok(rng.random::<f64>())
     }
 
+    fn fold(
+        &self,
+        _prepared: &DummyScenario,
+        _batch: usize,
+        _index: usize,
+        record: Self::Record,
+        _fold: &mut (),
+    ) -> Self::Record {
+        record
+    }
+
     fn analyse(
         &self,
         c: &DummyScenario,
         records: Vec<Vec<f64>>,
+        _folds: Vec<()>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
         let draws = &records[0];

@@ -3,11 +3,11 @@
 
 use rand_chacha::ChaCha8Rng;
 
-use super::{Analysis, Environment, Experiment, ScenarioFile};
+use super::{Analysis, Batch, Environment, Experiment, ScenarioFile};
 use crate::SimError;
-use crate::montecarlo::try_run_monte_carlo_with_progress;
+use crate::montecarlo::try_run_indices;
 use crate::output::Summary;
-use crate::progress::Progress;
+use crate::progress::{Progress, ProgressEvent};
 use crate::scenario::{parse_toml, require_experiment, to_toml};
 
 /// What the driver asks of one execution of an experiment.
@@ -53,6 +53,72 @@ pub struct Executed {
     pub analysis: Analysis,
 }
 
+/// The resolved scenario and the batches of a prepared experiment.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct Plan {
+    /// The resolved scenario.
+    pub resolved: Resolved,
+    /// The Monte Carlo batches, the main one first.
+    pub batches: Vec<Batch>,
+}
+
+/// Shard `index` of `count` of a campaign: the run indices of a batch it executes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct Shard {
+    /// This shard, `0 <= index < count`.
+    pub index: usize,
+    /// Number of shards.
+    pub count: usize,
+}
+
+impl Shard {
+    /// Run indices of a batch of `runs` runs: a contiguous block, the blocks of the
+    /// shards covering `0..runs` once (uneven when `count` does not divide `runs`).
+    pub fn range(&self, runs: usize) -> std::ops::Range<usize> {
+        let at = |k: usize| (runs as u128 * k as u128 / self.count.max(1) as u128) as usize;
+        at(self.index)..at(self.index + 1)
+    }
+}
+
+/// Where a shard writes its records.
+pub trait RecordSink {
+    /// Batch `batch` starts; the shard runs its indices `range`.
+    ///
+    /// # Errors
+    /// I/O errors.
+    fn begin_batch(
+        &mut self,
+        batch: usize,
+        info: &Batch,
+        range: std::ops::Range<usize>,
+    ) -> Result<(), SimError>;
+    /// The record of run `index` of batch `batch`, as JSON.
+    ///
+    /// # Errors
+    /// I/O errors.
+    fn record(&mut self, batch: usize, index: usize, json: &str) -> Result<(), SimError>;
+}
+
+/// One record read back: its run index, its JSON and where it came from (for errors).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FoundRecord {
+    /// Run index.
+    pub index: usize,
+    /// The record as JSON.
+    pub json: String,
+    /// File and line, for error messages.
+    pub origin: String,
+}
+
+/// Where merged records come from: per batch, in run-index order.
+pub trait RecordSource {
+    /// The next record of batch `batch`, or `None` when the batch has no more.
+    ///
+    /// # Errors
+    /// I/O or format errors naming the file and line.
+    fn next(&mut self, batch: usize) -> Result<Option<FoundRecord>, SimError>;
+}
+
 /// One prepared Monte Carlo run of an experiment's main batch (the benchmarks' unit).
 pub type SingleRunFn = Box<dyn Fn(usize, &mut ChaCha8Rng) -> Result<(), SimError> + Send + Sync>;
 
@@ -89,6 +155,36 @@ pub trait DynExperiment: Send + Sync {
     /// # Errors
     /// As [`DynExperiment::resolve`], then preparation, run and analysis errors.
     fn execute(&self, job: &Job<'_>) -> Result<Executed, SimError>;
+
+    /// Parse, override, check and prepare: the resolved scenario and the batches.
+    ///
+    /// # Errors
+    /// As [`DynExperiment::resolve`], then preparation errors.
+    fn plan(&self, job: &Job<'_>) -> Result<Plan, SimError>;
+
+    /// Runs the run indices of `shard` in every batch and hands each run's record,
+    /// serialized as JSON, to `sink` (a shard of a campaign: no analysis).
+    ///
+    /// # Errors
+    /// As [`DynExperiment::execute`], then the sink's errors.
+    fn execute_shard(
+        &self,
+        job: &Job<'_>,
+        shard: Shard,
+        sink: &mut dyn RecordSink,
+    ) -> Result<Plan, SimError>;
+
+    /// The analysis of records read back from `source` (merged shards): the same
+    /// result as [`DynExperiment::execute`] on the same runs.
+    ///
+    /// # Errors
+    /// A missing, duplicated, misplaced or corrupted record, then as
+    /// [`DynExperiment::execute`].
+    fn execute_from(
+        &self,
+        job: &Job<'_>,
+        source: &mut dyn RecordSource,
+    ) -> Result<Executed, SimError>;
 
     /// Prepares the scenario `text` and returns its main batch's run function (for
     /// the benchmarks: the run index and the RNG in, the record dropped).
@@ -140,6 +236,97 @@ fn parse_with_overrides<E: Experiment>(
     Ok((scenario, checked, resolved))
 }
 
+/// Parse, override, check and prepare; the batches of the prepared experiment.
+fn plan<E: Experiment>(
+    exp: &E,
+    job: &Job<'_>,
+) -> Result<(Resolved, E::Prepared, Vec<Batch>), SimError> {
+    if job.threads == Some(0) {
+        return Err(SimError::invalid_argument(
+            "--threads",
+            "must be at least 1",
+        ));
+    }
+    let (_, checked, resolved) = parse_with_overrides(exp, job.text, job.file, job.runs, job.seed)?;
+    let prepared = exp.prepare(checked, &job.env)?;
+    let batches = exp.batches(&prepared);
+    Ok((resolved, prepared, batches))
+}
+
+/// Runs the indices `range` of batch `b` in chunks (parallel within a chunk) and hands
+/// each record to `each` in run order. The chunking bounds the records held at once;
+/// it changes nothing in the results.
+#[allow(clippy::too_many_arguments)]
+fn run_batch<E: Experiment>(
+    exp: &E,
+    job: &Job<'_>,
+    prepared: &E::Prepared,
+    b: usize,
+    batch: &Batch,
+    range: std::ops::Range<usize>,
+    seed: u64,
+    mut each: impl FnMut(usize, E::Record) -> Result<(), SimError>,
+) -> Result<(), SimError> {
+    let progress = job.progress.as_ref();
+    if let Some(p) = progress {
+        p.report(ProgressEvent::BatchStarted {
+            label: batch.label.clone(),
+            total: range.len(),
+        });
+    }
+    let chunk = CHUNK_RUNS_PER_THREAD
+        * job
+            .threads
+            .unwrap_or_else(rayon::current_num_threads)
+            .max(1);
+    let mut start = range.start;
+    while start < range.end {
+        let end = (start + chunk).min(range.end);
+        let records = try_run_indices(start..end, seed, job.threads, progress, |i, rng| {
+            exp.run(prepared, b, i, rng)
+                .map_err(|e| SimError::model(format!("{}: run {i}", batch.label), e))
+        })?;
+        for (i, record) in (start..end).zip(records) {
+            each(i, record)?;
+        }
+        start = end;
+    }
+    if let Some(p) = progress {
+        p.report(ProgressEvent::BatchFinished {
+            label: batch.label.clone(),
+        });
+    }
+    Ok(())
+}
+
+/// Analysis and summary from what was kept and folded.
+fn finish<E: Experiment>(
+    exp: &E,
+    prepared: &E::Prepared,
+    resolved: Resolved,
+    batches: &[Batch],
+    kept: Vec<Vec<E::Kept>>,
+    folds: Vec<E::Fold>,
+) -> Result<Executed, SimError> {
+    let mut analysis = Analysis::new();
+    exp.analyse(prepared, kept, folds, &mut analysis)?;
+    let runs = batches.first().map_or(0, |b| b.runs);
+    let seed = resolved.base_seed.unwrap_or(0);
+    let mut summary = Summary::new(E::NAME, E::SEED_DOC, runs, seed);
+    summary.rows = std::mem::take(&mut analysis.rows);
+    summary.claims = std::mem::take(&mut analysis.claims);
+    summary.extra = std::mem::take(&mut analysis.extra);
+    summary.check()?;
+    Ok(Executed {
+        resolved,
+        summary,
+        analysis,
+    })
+}
+
+/// Runs per worker thread in one chunk of a batch.
+const CHUNK_RUNS_PER_THREAD: usize = 32;
+
 impl<E: Experiment> DynExperiment for E {
     fn name(&self) -> &'static str {
         E::NAME
@@ -176,46 +363,103 @@ impl<E: Experiment> DynExperiment for E {
     }
 
     fn execute(&self, job: &Job<'_>) -> Result<Executed, SimError> {
-        if job.threads == Some(0) {
-            return Err(SimError::invalid_argument(
-                "--threads",
-                "must be at least 1",
-            ));
-        }
-        let (_, checked, resolved) =
-            parse_with_overrides(self, job.text, job.file, job.runs, job.seed)?;
-        let prepared = self.prepare(checked, &job.env)?;
-        let batches = self.batches(&prepared);
+        let (resolved, prepared, batches) = plan(self, job)?;
         let seed = resolved.base_seed.unwrap_or(0);
-        let mut records = Vec::with_capacity(batches.len());
+        let mut kept = Vec::with_capacity(batches.len());
+        let mut folds = Vec::with_capacity(batches.len());
         for (b, batch) in batches.iter().enumerate() {
-            let prepared = &prepared;
-            let runs = try_run_monte_carlo_with_progress(
-                batch.runs,
+            let mut fold = E::Fold::default();
+            let mut k = Vec::with_capacity(batch.runs);
+            run_batch(
+                self,
+                job,
+                &prepared,
+                b,
+                batch,
+                0..batch.runs,
                 seed,
-                job.threads,
-                job.progress.as_ref(),
-                &batch.label,
-                |i, rng| {
-                    self.run(prepared, b, i, rng)
-                        .map_err(|e| SimError::model(format!("{}: run {i}", batch.label), e))
+                |i, record| {
+                    k.push(self.fold(&prepared, b, i, record, &mut fold));
+                    Ok(())
                 },
             )?;
-            records.push(runs);
+            kept.push(k);
+            folds.push(fold);
         }
-        let mut analysis = Analysis::new();
-        self.analyse(&prepared, records, &mut analysis)?;
-        let runs = batches.first().map_or(0, |b| b.runs);
-        let mut summary = Summary::new(E::NAME, E::SEED_DOC, runs, seed);
-        summary.rows = std::mem::take(&mut analysis.rows);
-        summary.claims = std::mem::take(&mut analysis.claims);
-        summary.extra = std::mem::take(&mut analysis.extra);
-        summary.check()?;
-        Ok(Executed {
-            resolved,
-            summary,
-            analysis,
-        })
+        finish(self, &prepared, resolved, &batches, kept, folds)
+    }
+
+    fn execute_shard(
+        &self,
+        job: &Job<'_>,
+        shard: Shard,
+        sink: &mut dyn RecordSink,
+    ) -> Result<Plan, SimError> {
+        let (resolved, prepared, batches) = plan(self, job)?;
+        let seed = resolved.base_seed.unwrap_or(0);
+        for (b, batch) in batches.iter().enumerate() {
+            let range = shard.range(batch.runs);
+            sink.begin_batch(b, batch, range.clone())?;
+            run_batch(self, job, &prepared, b, batch, range, seed, |i, record| {
+                let json = serde_json::to_string(&record).map_err(|e| SimError::Json {
+                    path: format!("record of run {i} of batch `{}`", batch.label).into(),
+                    source: e,
+                })?;
+                sink.record(b, i, &json)
+            })?;
+        }
+        Ok(Plan { resolved, batches })
+    }
+
+    fn execute_from(
+        &self,
+        job: &Job<'_>,
+        source: &mut dyn RecordSource,
+    ) -> Result<Executed, SimError> {
+        let (resolved, prepared, batches) = plan(self, job)?;
+        let mut kept = Vec::with_capacity(batches.len());
+        let mut folds = Vec::with_capacity(batches.len());
+        for (b, batch) in batches.iter().enumerate() {
+            let mut fold = E::Fold::default();
+            let mut k = Vec::with_capacity(batch.runs);
+            for i in 0..batch.runs {
+                let Some(found) = source.next(b)? else {
+                    return Err(SimError::invalid_argument(
+                        format!("records of batch `{}`", batch.label),
+                        format!("run {i} is missing ({} runs expected)", batch.runs),
+                    ));
+                };
+                if found.index != i {
+                    return Err(SimError::invalid_argument(
+                        format!("records of batch `{}` ({})", batch.label, found.origin),
+                        format!("expected run {i}, found run {}", found.index),
+                    ));
+                }
+                let record: E::Record =
+                    serde_json::from_str(&found.json).map_err(|e| SimError::Json {
+                        path: found.origin.clone().into(),
+                        source: e,
+                    })?;
+                k.push(self.fold(&prepared, b, i, record, &mut fold));
+            }
+            if let Some(extra) = source.next(b)? {
+                return Err(SimError::invalid_argument(
+                    format!("records of batch `{}` ({})", batch.label, extra.origin),
+                    format!(
+                        "run {} is beyond the {} runs of the batch",
+                        extra.index, batch.runs
+                    ),
+                ));
+            }
+            kept.push(k);
+            folds.push(fold);
+        }
+        finish(self, &prepared, resolved, &batches, kept, folds)
+    }
+
+    fn plan(&self, job: &Job<'_>) -> Result<Plan, SimError> {
+        let (resolved, _, batches) = plan(self, job)?;
+        Ok(Plan { resolved, batches })
     }
 
     fn single_run(

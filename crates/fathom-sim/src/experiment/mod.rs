@@ -43,7 +43,10 @@ use serde::de::DeserializeOwned;
 use crate::SimError;
 
 pub use analysis::{Analysis, OutputFile};
-pub use dynamic::{DynExperiment, Executed, Job, Resolved, SingleRunFn};
+pub use dynamic::{
+    DynExperiment, Executed, FoundRecord, Job, Plan, RecordSink, RecordSource, Resolved, Shard,
+    SingleRunFn,
+};
 
 /// The header keys every scenario file has, read and overridden by the driver.
 pub trait ScenarioFile: Serialize + DeserializeOwned + schemars::JsonSchema + Send + Sync {
@@ -124,8 +127,15 @@ pub trait Experiment: Clone + Send + Sync + 'static {
     type Checked: Send + Sync;
     /// What all runs share (built once per execution).
     type Prepared: Send + Sync;
-    /// What one run returns to the analysis.
-    type Record: Send;
+    /// What one run returns: serializable, so that a shard of a campaign can write it
+    /// to disk and `fathom merge` read it back ([`crate::driver::campaign`]).
+    type Record: Send + Serialize + DeserializeOwned;
+    /// What the analysis keeps of each run (the per-run scalars), made by
+    /// [`Experiment::fold`].
+    type Kept: Send;
+    /// What the analysis accumulates over a batch in run order (sums of per-time
+    /// series, counts): its size does not grow with the number of runs.
+    type Fold: Default + Send;
 
     /// Name, also the output directory and the scenario's `experiment` value
     /// (`[a-z0-9_-]+`).
@@ -173,15 +183,30 @@ pub trait Experiment: Clone + Send + Sync + 'static {
         rng: &mut ChaCha8Rng,
     ) -> Result<Self::Record, SimError>;
 
-    /// Turns the records of every batch (`records[batch][run]`, in run order) into
-    /// rows, claims, figures, CSV files and report text.
+    /// Folds run `index` of batch `batch` into the batch's accumulator and returns what
+    /// the analysis keeps of it. The driver calls it for every run in run order, whatever
+    /// the thread count or the sharding, so sums come out bit-identical; the record is
+    /// dropped afterwards, so a campaign's memory does not grow with its run count
+    /// beyond what is kept.
+    fn fold(
+        &self,
+        prepared: &Self::Prepared,
+        batch: usize,
+        index: usize,
+        record: Self::Record,
+        fold: &mut Self::Fold,
+    ) -> Self::Kept;
+
+    /// Turns what was kept of every batch (`kept[batch][run]`, in run order) and the
+    /// batches' accumulators into rows, claims, figures, CSV files and report text.
     ///
     /// # Errors
     /// Statistics, figure or model errors.
     fn analyse(
         &self,
         prepared: &Self::Prepared,
-        records: Vec<Vec<Self::Record>>,
+        kept: Vec<Vec<Self::Kept>>,
+        folds: Vec<Self::Fold>,
         out: &mut Analysis,
     ) -> Result<(), SimError>;
 }

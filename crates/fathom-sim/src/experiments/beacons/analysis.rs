@@ -5,7 +5,7 @@ use fathom_estimators::schemes::UpdateScheme;
 use fathom_stats::{clopper_pearson, mean_and_ci95};
 
 use super::paper::{PAPER_INJECTED, PAPER_TABLE13, PAPER_TABLE14};
-use super::run::SchemeStats;
+use super::run::{BatchSums, KeptStats};
 use super::scenario::Checked;
 use super::{MAIN_CASE, figures, method, report};
 use crate::SimError;
@@ -53,11 +53,12 @@ pub(super) fn main_case(checked: &Checked) -> usize {
 
 /// The aggregated statistics of scheme `si` on case `ci` of `per_run`.
 fn aggregate(
-    per_run: &[Vec<Vec<SchemeStats>>],
+    per_run: &[Vec<Vec<KeptStats>>],
+    sums: &BatchSums,
     ci: usize,
     si: usize,
 ) -> Result<SchemeTable, SimError> {
-    let get = |g: &dyn Fn(&SchemeStats) -> f64| -> Vec<f64> {
+    let get = |g: &dyn Fn(&KeptStats) -> f64| -> Vec<f64> {
         per_run.iter().map(|r| g(&r[ci][si])).collect()
     };
     let recall_vals = get(&|s| s.recall);
@@ -69,9 +70,10 @@ fn aggregate(
             ci: [f64::NAN; 2],
         }
     };
-    let avg = |g: &dyn Fn(&SchemeStats) -> f64| get(g).iter().sum::<f64>() / per_run.len() as f64;
-    let pooled_rejected = per_run.iter().map(|r| r[ci][si].rejected as u64).sum();
-    let pooled_injected = per_run.iter().map(|r| r[ci][si].injected as u64).sum();
+    let avg = |g: &dyn Fn(&KeptStats) -> f64| get(g).iter().sum::<f64>() / per_run.len() as f64;
+    let acc = &sums.cases[ci][si];
+    let n = per_run.len() as f64;
+    let (pooled_rejected, pooled_injected) = (acc.pooled_rejected, acc.pooled_injected);
     Ok(SchemeTable {
         stats: [
             agg(&get(&|s| s.stats.mean))?,
@@ -83,8 +85,8 @@ fn aggregate(
         ],
         nees: avg(&|s| s.nees_mean),
         rejected: avg(&|s| s.rejected as f64),
-        untested: avg(&|s| s.untested as f64),
-        injected: avg(&|s| s.injected as f64),
+        untested: acc.untested / n,
+        injected: acc.injected / n,
         pooled_recall: (pooled_injected > 0)
             .then(|| clopper_pearson(pooled_rejected, pooled_injected, 0.95))
             .transpose()?,
@@ -132,8 +134,9 @@ fn push_rows(out: &mut Analysis, m: &str, t: &SchemeTable, paper: (Option<[f64; 
 /// runs of layout `k` of the geometry sensitivity (main case only).
 pub(super) fn analyse(
     checked: &Checked,
-    per_run: &[Vec<Vec<SchemeStats>>],
-    layouts: &[Vec<Vec<Vec<SchemeStats>>>],
+    per_run: &[Vec<Vec<KeptStats>>],
+    sums: &BatchSums,
+    layouts: &[(&[Vec<Vec<KeptStats>>], &BatchSums)],
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let schemes = UpdateScheme::ALL;
@@ -141,7 +144,7 @@ pub(super) fn analyse(
     for (ci, case) in checked.cases.iter().enumerate() {
         let mut row_c = Vec::new();
         for (si, &scheme) in schemes.iter().enumerate() {
-            let t = aggregate(per_run, ci, si)?;
+            let t = aggregate(per_run, sums, ci, si)?;
             let paper = if case.name == MAIN_CASE {
                 paper_of(scheme)
             } else {
@@ -154,10 +157,10 @@ pub(super) fn analyse(
     }
     // The geometry sensitivity: the main case under further beacon layouts.
     let mut layout_tables = Vec::with_capacity(layouts.len());
-    for (layout, runs) in checked.layouts.iter().zip(layouts) {
+    for (layout, (runs, layout_sums)) in checked.layouts.iter().zip(layouts) {
         let mut row = Vec::new();
         for (si, &scheme) in schemes.iter().enumerate() {
-            let t = aggregate(runs, 0, si)?;
+            let t = aggregate(runs, layout_sums, 0, si)?;
             let m = format!("{}@{}", method(scheme, MAIN_CASE), layout.name);
             push_rows(out, &m, &t, paper_of(scheme));
             row.push(t);
@@ -166,18 +169,18 @@ pub(super) fn analyse(
     }
 
     claims(checked, &table, per_run, out)?;
-    figures::write(checked, per_run, out)?;
-    report::write(checked, &table, per_run, &layout_tables, out);
+    figures::write(checked, per_run, sums, out)?;
+    report::write(checked, &table, per_run, sums, &layout_tables, out);
     Ok(())
 }
 
 /// Paired 95 % CI of scheme `a` minus scheme `b` on case `ci`, statistic `g`.
 fn paired(
-    per_run: &[Vec<Vec<SchemeStats>>],
+    per_run: &[Vec<Vec<KeptStats>>],
     ci: usize,
     a: usize,
     b: usize,
-    g: fn(&SchemeStats) -> f64,
+    g: fn(&KeptStats) -> f64,
 ) -> Result<(f64, [f64; 2]), SimError> {
     let va: Vec<f64> = per_run.iter().map(|r| g(&r[ci][a])).collect();
     let vb: Vec<f64> = per_run.iter().map(|r| g(&r[ci][b])).collect();
@@ -188,13 +191,13 @@ fn paired(
 fn claims(
     checked: &Checked,
     table: &Table,
-    per_run: &[Vec<Vec<SchemeStats>>],
+    per_run: &[Vec<Vec<KeptStats>>],
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let case_index = |name: &str| checked.cases.iter().position(|c| c.name == name);
     let main = main_case(checked);
     // "SC is best": the paired 95 % CIs of SC - AS and SC - SI both below zero.
-    let best = |k: usize, g: fn(&SchemeStats) -> f64| -> Result<(bool, String), SimError> {
+    let best = |k: usize, g: fn(&KeptStats) -> f64| -> Result<(bool, String), SimError> {
         let v: Vec<f64> = (0..3).map(|si| table[main][si].stats[k].mean).collect();
         let (d_as, c_as) = paired(per_run, main, 1, 0, g)?;
         let (d_si, c_si) = paired(per_run, main, 1, 2, g)?;
@@ -231,7 +234,7 @@ fn claims(
     ));
     if let Some(low) = case_index("low") {
         // Per run: (SI - SC) with high correlation minus (SI - SC) with low.
-        let adv = |r: &Vec<Vec<SchemeStats>>, ci: usize| r[ci][2].stats.mean - r[ci][1].stats.mean;
+        let adv = |r: &Vec<Vec<KeptStats>>, ci: usize| r[ci][2].stats.mean - r[ci][1].stats.mean;
         let shrink: Vec<f64> = per_run.iter().map(|r| adv(r, main) - adv(r, low)).collect();
         let (d, c) = fathom_stats::mean_and_ci95(&shrink)?;
         out.claim(Claim::new(

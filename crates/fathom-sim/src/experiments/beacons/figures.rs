@@ -7,7 +7,7 @@ use fathom_sensors::BeaconSuiteData;
 use fathom_traj::{Trajectory, velocity_command::VelocityCommandMotion};
 
 use super::analysis::main_case;
-use super::run::{SchemeStats, simulate_run};
+use super::run::{BatchSums, KeptStats, simulate_run};
 use super::scenario::Checked;
 use super::{MAIN_CASE, method};
 use crate::SimError;
@@ -18,12 +18,13 @@ use crate::plot::{LinePlot, PlanPlot, Series, Timeline};
 /// Adds every figure and CSV file to `out`.
 pub(super) fn write(
     checked: &Checked,
-    per_run: &[Vec<Vec<SchemeStats>>],
+    per_run: &[Vec<Vec<KeptStats>>],
+    sums: &BatchSums,
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let schemes = UpdateScheme::ALL;
     // Mean error vs time over runs, every case and scheme.
-    let n_t = per_run[0][0][0].errors.len();
+    let n_t = sums.cases[0][0].errors.len();
     let period = checked.cases[0].setup.settings.epoch_period;
     let times: Vec<f64> = (1..=n_t).map(|j| j as f64 * period).collect();
     let mut headers = vec!["time_s".to_owned()];
@@ -38,11 +39,8 @@ pub(super) fn write(
             "3D position error (m)",
         );
         for (si, s) in schemes.iter().enumerate() {
-            let mean: Vec<f64> = (0..n_t)
-                .map(|j| {
-                    per_run.iter().map(|r| r[ci][si].errors[j]).sum::<f64>() / per_run.len() as f64
-                })
-                .collect();
+            let acc = &sums.cases[ci][si];
+            let mean: Vec<f64> = acc.errors.iter().map(|e| e / acc.runs as f64).collect();
             plot.series
                 .push(Series::from_xy(s.short_name(), &times, &mean)?);
             headers.push(format!(
@@ -66,16 +64,16 @@ pub(super) fn write(
             for (name, g) in [
                 (
                     "mean",
-                    &(|x: &SchemeStats| x.stats.mean) as &dyn Fn(&SchemeStats) -> f64,
+                    &(|x: &KeptStats| x.stats.mean) as &dyn Fn(&KeptStats) -> f64,
                 ),
-                ("std", &|x: &SchemeStats| x.stats.std),
-                ("max", &|x: &SchemeStats| x.stats.max),
-                ("rmse", &|x: &SchemeStats| x.stats.rmse),
-                ("outliers_rejected", &|x: &SchemeStats| x.rejected as f64),
-                ("false_rejections", &|x: &SchemeStats| {
+                ("std", &|x: &KeptStats| x.stats.std),
+                ("max", &|x: &KeptStats| x.stats.max),
+                ("rmse", &|x: &KeptStats| x.stats.rmse),
+                ("outliers_rejected", &|x: &KeptStats| x.rejected as f64),
+                ("false_rejections", &|x: &KeptStats| {
                     x.false_rejections as f64
                 }),
-                ("nees_time_avg", &|x: &SchemeStats| x.nees_mean),
+                ("nees_time_avg", &|x: &KeptStats| x.nees_mean),
             ] {
                 headers.push(format!("{m}_{name}"));
                 cols.push(per_run.iter().map(|r| g(&r[ci][si])).collect());

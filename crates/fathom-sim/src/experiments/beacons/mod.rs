@@ -34,7 +34,7 @@ use fathom_estimators::schemes::UpdateScheme;
 use rand_chacha::ChaCha8Rng;
 
 pub use self::filter::{EkfSettings, FilterSetup, SchemeRun, events, run_scheme};
-pub use self::run::SchemeStats;
+pub use self::run::{BatchSums, KeptStats, SchemeStats};
 use self::scenario::{BeaconsScenario, Checked};
 use crate::SimError;
 use crate::experiment::{Analysis, Batch, Environment, Experiment};
@@ -58,6 +58,8 @@ impl Experiment for Beacons {
     /// Per case, per scheme (AS, SC, SI): the run's statistics (a layout batch has
     /// the main case only).
     type Record = Vec<Vec<SchemeStats>>;
+    type Kept = Vec<Vec<KeptStats>>;
+    type Fold = BatchSums;
 
     const NAME: &'static str = "beacons";
     const SEED_DOC: &'static str = "003_9d29f3a0492aaff3.txt";
@@ -97,14 +99,33 @@ impl Experiment for Beacons {
         }
     }
 
+    fn fold(
+        &self,
+        _checked: &Checked,
+        _batch: usize,
+        _index: usize,
+        record: Self::Record,
+        sums: &mut BatchSums,
+    ) -> Self::Kept {
+        run::fold_run(record, sums)
+    }
+
     fn analyse(
         &self,
         checked: &Checked,
-        mut records: Vec<Vec<Self::Record>>,
+        kept: Vec<Vec<Self::Kept>>,
+        folds: Vec<BatchSums>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
-        let layouts = records.split_off(1);
-        let per_run = records.swap_remove(0);
-        analysis::analyse(checked, &per_run, &layouts, out)
+        let main = (kept.first(), folds.first());
+        let (Some(per_run), Some(sums)) = main else {
+            return Err(SimError::invalid_argument("beacons", "no main batch"));
+        };
+        let layouts: Vec<(&[Self::Kept], &BatchSums)> = kept[1..]
+            .iter()
+            .map(Vec::as_slice)
+            .zip(&folds[1..])
+            .collect();
+        analysis::analyse(checked, per_run, sums, &layouts, out)
     }
 }

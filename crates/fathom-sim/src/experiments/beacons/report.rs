@@ -10,7 +10,7 @@ use fathom_stats::paired_mean_ci;
 use super::analysis::SchemeTable;
 use super::analysis::{Table, main_case};
 use super::paper::{PAPER_INJECTED, PAPER_TABLE13, PAPER_TABLE14};
-use super::run::SchemeStats;
+use super::run::{BatchSums, KeptStats};
 use super::scenario::Checked;
 use super::{MAIN_CASE, method};
 use crate::experiment::Analysis;
@@ -36,7 +36,7 @@ fn lowest_mean(table: &Table, ci: usize) -> usize {
 
 /// Paired difference of the per-run mean error, scheme `a` - scheme `b`, on case `ci`.
 fn paired(
-    per_run: &[Vec<Vec<SchemeStats>>],
+    per_run: &[Vec<Vec<KeptStats>>],
     ci: usize,
     a: usize,
     b: usize,
@@ -60,18 +60,19 @@ fn relation(d: Option<(f64, [f64; 2])>) -> &'static str {
 pub(super) fn write(
     checked: &Checked,
     table: &Table,
-    per_run: &[Vec<Vec<SchemeStats>>],
+    per_run: &[Vec<Vec<KeptStats>>],
+    sums: &BatchSums,
     layouts: &Table,
     out: &mut Analysis,
 ) {
     let main = main_case(checked);
     out.report(&table13(checked, table, main));
     out.report(&geometry(checked, table, layouts, main));
-    out.report(&table14(checked, table, per_run, main));
+    out.report(&table14(checked, table, sums, main));
     out.report(&all_cases(checked, table, per_run));
     out.report(&consistency(checked, table, main));
-    out.report(&gate_decisions(per_run, main));
-    out.report(&decisions(checked, per_run, main));
+    out.report(&gate_decisions(sums, main));
+    out.report(&decisions(checked, sums, main));
     out.report(&paper_inconsistencies());
 }
 
@@ -263,12 +264,7 @@ fn geometry(checked: &Checked, table: &Table, layouts: &Table, main: usize) -> S
     s
 }
 
-fn table14(
-    checked: &Checked,
-    table: &Table,
-    per_run: &[Vec<Vec<SchemeStats>>],
-    main: usize,
-) -> String {
+fn table14(checked: &Checked, table: &Table, sums: &BatchSums, main: usize) -> String {
     let mut s = String::from("### Table 14: outlier detection\n\n");
     s.push_str(
         "Per run: injected outliers rejected by the gate / injected. `untested` = injected outliers the \
@@ -283,11 +279,8 @@ fn table14(
     for (ci, case) in checked.cases.iter().enumerate() {
         for (si, sch) in SCHEMES.iter().enumerate() {
             let e = &table[ci][si];
-            let clean = per_run
-                .iter()
-                .map(|r| r[ci][si].clean_tested as f64)
-                .sum::<f64>()
-                / per_run.len() as f64;
+            let acc = &sums.cases[ci][si];
+            let clean = acc.clean_tested / acc.runs as f64;
             let t = &e.stats;
             let paper = (ci == main).then(|| format!("{}/{PAPER_INJECTED}", PAPER_TABLE14[si].1));
             rows.push(vec![
@@ -315,17 +308,12 @@ fn table14(
     ));
     // Range samples per run of the main case (all dispositions of the AS filter's
     // range channels).
-    let range_samples = per_run
+    let as_main = &sums.cases[main][0];
+    let range_samples = as_main.counts[..as_main.counts.len() - 1]
         .iter()
-        .map(|r| {
-            let c = &r[main][0].counts;
-            c[..c.len() - 1]
-                .iter()
-                .map(|c| c.accepted + c.rejected + c.superseded + c.stale)
-                .sum::<usize>() as f64
-        })
-        .sum::<f64>()
-        / per_run.len() as f64;
+        .map(|c| c.accepted + c.rejected + c.superseded + c.stale)
+        .sum::<usize>() as f64
+        / as_main.runs as f64;
     s.push_str(&format!(
         "\n`expected false rej.` = clean range samples tested x P(chi2_1 > {}) = x {}: the rate at \
          which a {}-sigma gate must reject clean samples of a consistent filter (about {} %). \
@@ -346,11 +334,8 @@ fn table14(
         .iter()
         .enumerate()
         .map(|(ci, c)| {
-            let accepted = per_run
-                .iter()
-                .map(|r| r[ci][0].injected - r[ci][0].rejected - r[ci][0].untested)
-                .sum::<usize>() as f64
-                / per_run.len() as f64;
+            let acc = &sums.cases[ci][0];
+            let accepted = acc.passed as f64 / acc.runs as f64;
             format!(
                 "`{}` (sigma_c = {} m): {} of {}",
                 c.name,
@@ -369,7 +354,7 @@ fn table14(
     s
 }
 
-fn all_cases(checked: &Checked, table: &Table, per_run: &[Vec<Vec<SchemeStats>>]) -> String {
+fn all_cases(checked: &Checked, table: &Table, per_run: &[Vec<Vec<KeptStats>>]) -> String {
     let mut s = String::from("\n### All cases: mean 3D error (m)\n\n");
     let mut rows = Vec::new();
     for (ci, case) in checked.cases.iter().enumerate() {
@@ -481,16 +466,15 @@ fn consistency(checked: &Checked, table: &Table, main: usize) -> String {
     s
 }
 
-fn gate_decisions(per_run: &[Vec<Vec<SchemeStats>>], main: usize) -> String {
+fn gate_decisions(sums: &BatchSums, main: usize) -> String {
     let mut s =
         format!("### Gate decisions per sensor (case `{MAIN_CASE}`, totals over all runs)\n\n");
     let mut rows = Vec::new();
     for (si, sch) in SCHEMES.iter().enumerate() {
-        let n_ch = per_run[0][main][si].counts.len();
-        for ch in 0..n_ch {
-            let sum = |g: &dyn Fn(&ChannelCounts) -> usize| -> usize {
-                per_run.iter().map(|r| g(&r[main][si].counts[ch])).sum()
-            };
+        let counts = &sums.cases[main][si].counts;
+        let n_ch = counts.len();
+        for (ch, total) in counts.iter().enumerate() {
+            let sum = |g: &dyn Fn(&ChannelCounts) -> usize| -> usize { g(total) };
             let name = if ch + 1 == n_ch {
                 "depth".to_owned()
             } else {
@@ -522,7 +506,7 @@ fn gate_decisions(per_run: &[Vec<Vec<SchemeStats>>], main: usize) -> String {
     s
 }
 
-fn decisions(checked: &Checked, per_run: &[Vec<Vec<SchemeStats>>], main: usize) -> String {
+fn decisions(checked: &Checked, sums: &BatchSums, main: usize) -> String {
     let setup = &checked.cases[main].setup;
     let settings = &setup.settings;
     let mp = setup.motion_params();
@@ -530,26 +514,21 @@ fn decisions(checked: &Checked, per_run: &[Vec<Vec<SchemeStats>>], main: usize) 
     let c = &checked.motion.command;
     let speed = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
     // SC (index 1) on the main case: superseded shares of the range and depth samples.
-    let totals = per_run
-        .iter()
-        .fold((0usize, 0usize, 0usize, 0usize), |acc, r| {
-            let counts = &r[main][1].counts;
-            let all = |c: &ChannelCounts| c.accepted + c.rejected + c.superseded + c.stale;
-            let ranges = &counts[..counts.len() - 1];
-            let depth = &counts[counts.len() - 1];
-            (
-                acc.0 + ranges.iter().map(|c| c.superseded).sum::<usize>(),
-                acc.1 + ranges.iter().map(all).sum::<usize>(),
-                acc.2 + depth.superseded,
-                acc.3 + all(depth),
-            )
-        });
+    let sc = &sums.cases[main][1];
+    let totals = {
+        let counts = &sc.counts;
+        let all = |c: &ChannelCounts| c.accepted + c.rejected + c.superseded + c.stale;
+        let ranges = &counts[..counts.len() - 1];
+        let depth = &counts[counts.len() - 1];
+        (
+            ranges.iter().map(|c| c.superseded).sum::<usize>(),
+            ranges.iter().map(all).sum::<usize>(),
+            depth.superseded,
+            all(depth),
+        )
+    };
     let share = |a: usize, b: usize| if b > 0 { a as f64 / b as f64 } else { 0.0 };
-    let untested_sc = per_run
-        .iter()
-        .map(|r| r[main][1].untested as f64)
-        .sum::<f64>()
-        / per_run.len() as f64;
+    let untested_sc = sc.untested / sc.runs as f64;
     let mut s = String::from("\n### Interpretation decisions\n\n");
     s.push_str(&format!(
         "- State `(x, y, z, psi)`; prediction by dead reckoning with the latest DVL velocity and AHRS \

@@ -48,7 +48,7 @@ fn simulate_cases(
 }
 
 /// What one run contributes to the statistics, per case and scheme.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct SchemeStats {
     pub(super) stats: RunStats,
     pub(super) nees_mean: f64,
@@ -78,6 +78,87 @@ pub(super) fn one_layout_run(
 ) -> Result<Vec<Vec<SchemeStats>>, SimError> {
     let case = std::slice::from_ref(&checked.layouts[layout].case);
     stats_of(simulate_cases(checked, case, rng)?)
+}
+
+/// What the analysis keeps of one scheme on one case of one run (the per-run scalars
+/// of the CIs, the paired differences and the per-run CSV).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KeptStats {
+    pub(super) stats: RunStats,
+    pub(super) nees_mean: f64,
+    pub(super) recall: f64,
+    pub(super) rejected: usize,
+    pub(super) false_rejections: usize,
+}
+
+/// Sums over a batch's runs of one scheme on one case, in run order.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct SchemeSums {
+    /// Runs folded.
+    pub(super) runs: usize,
+    /// Per evaluation instant, the sum of the 3D errors.
+    pub(super) errors: Vec<f64>,
+    pub(super) untested: f64,
+    pub(super) injected: f64,
+    pub(super) clean_tested: f64,
+    /// Injected outliers that passed the gate.
+    pub(super) passed: usize,
+    pub(super) pooled_rejected: u64,
+    pub(super) pooled_injected: u64,
+    /// Per channel, the dispositions summed over runs.
+    pub(super) counts: Vec<ChannelCounts>,
+}
+
+/// A batch's sums: `cases[case][scheme]`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct BatchSums {
+    pub(super) cases: Vec<Vec<SchemeSums>>,
+}
+
+/// Folds one run's record into `sums` and returns what the analysis keeps of it.
+pub(super) fn fold_run(record: Vec<Vec<SchemeStats>>, sums: &mut BatchSums) -> Vec<Vec<KeptStats>> {
+    if sums.cases.is_empty() {
+        sums.cases = record
+            .iter()
+            .map(|c| vec![SchemeSums::default(); c.len()])
+            .collect();
+    }
+    record
+        .into_iter()
+        .zip(&mut sums.cases)
+        .map(|(case, case_sums)| {
+            case.into_iter()
+                .zip(case_sums.iter_mut())
+                .map(|(s, acc)| {
+                    if acc.runs == 0 {
+                        acc.errors = s.errors.clone();
+                        acc.counts = s.counts.clone();
+                    } else {
+                        for (a, e) in acc.errors.iter_mut().zip(&s.errors) {
+                            *a += e;
+                        }
+                        for (a, c) in acc.counts.iter_mut().zip(&s.counts) {
+                            *a = ChannelCounts::total(&[*a, *c]);
+                        }
+                    }
+                    acc.runs += 1;
+                    acc.untested += s.untested as f64;
+                    acc.injected += s.injected as f64;
+                    acc.clean_tested += s.clean_tested as f64;
+                    acc.passed += s.injected - s.rejected - s.untested;
+                    acc.pooled_rejected += s.rejected as u64;
+                    acc.pooled_injected += s.injected as u64;
+                    KeptStats {
+                        stats: s.stats,
+                        nees_mean: s.nees_mean,
+                        recall: s.recall,
+                        rejected: s.rejected,
+                        false_rejections: s.false_rejections,
+                    }
+                })
+                .collect()
+        })
+        .collect()
 }
 
 fn stats_of(detail: RunDetail) -> Result<Vec<Vec<SchemeStats>>, SimError> {

@@ -41,7 +41,7 @@ fn metric_of(m: &MethodMetrics, name: &str) -> f64 {
 }
 
 /// One run's metrics per method (index of [`Method::ALL`]) and its error series.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct RunResult {
     /// Per-method metrics (`None` for methods not computed).
     pub metrics: Vec<Option<MethodMetrics>>,

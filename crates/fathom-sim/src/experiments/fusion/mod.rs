@@ -63,6 +63,8 @@ impl Experiment for Fusion {
     type Checked = FusionSetup;
     type Prepared = Prepared;
     type Record = RunResult;
+    type Kept = Self::Record;
+    type Fold = ();
 
     const NAME: &'static str = "fusion";
     const SEED_DOC: &'static str = "000_777a2c84247a6c44.txt";
@@ -160,10 +162,22 @@ impl Experiment for Fusion {
         }
     }
 
+    fn fold(
+        &self,
+        _prepared: &Prepared,
+        _batch: usize,
+        _index: usize,
+        record: Self::Record,
+        _fold: &mut (),
+    ) -> Self::Record {
+        record
+    }
+
     fn analyse(
         &self,
         p: &Prepared,
         records: Vec<Vec<RunResult>>,
+        _folds: Vec<()>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
         analysis::analyse(p, records, out)

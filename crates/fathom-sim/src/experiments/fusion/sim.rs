@@ -177,7 +177,7 @@ pub struct RunConfig {
 }
 
 /// Per-time errors of one run.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunOutput {
     /// Evaluation times `k step`, `k = 1..=n_steps`, s.
     pub times: Vec<Time>,
@@ -196,7 +196,7 @@ pub struct RunOutput {
 }
 
 /// Per-run statistics of one method.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MethodMetrics {
     /// Mean 3D error over time, m.
     pub mean_3d: f64,

@@ -46,6 +46,8 @@ impl Experiment for Noise {
     type Prepared = Checked;
     /// Per case, the run's 5x5 noise covariance.
     type Record = Vec<DMatrix<f64>>;
+    type Kept = Self::Record;
+    type Fold = ();
 
     const NAME: &'static str = "noise";
     const SEED_DOC: &'static str = "003_9d29f3a0492aaff3.txt";
@@ -76,10 +78,22 @@ impl Experiment for Noise {
         run::one_run(checked, rng)
     }
 
+    fn fold(
+        &self,
+        _prepared: &Checked,
+        _batch: usize,
+        _index: usize,
+        record: Self::Record,
+        _fold: &mut (),
+    ) -> Self::Record {
+        record
+    }
+
     fn analyse(
         &self,
         checked: &Checked,
         mut records: Vec<Vec<Self::Record>>,
+        _folds: Vec<()>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
         let per_run = records.swap_remove(0);

@@ -57,6 +57,8 @@ impl Experiment for Plaza {
     type Checked = PlazaSettings;
     type Prepared = Prepared;
     type Record = PlazaReplay;
+    type Kept = Self::Record;
+    type Fold = ();
 
     const NAME: &'static str = "plaza";
     const SEED_DOC: &'static str = "data/plaza1/README.md";
@@ -108,10 +110,22 @@ impl Experiment for Plaza {
         }
     }
 
+    fn fold(
+        &self,
+        _prepared: &Prepared,
+        _batch: usize,
+        _index: usize,
+        record: Self::Record,
+        _fold: &mut (),
+    ) -> Self::Record {
+        record
+    }
+
     fn analyse(
         &self,
         p: &Prepared,
         mut records: Vec<Vec<PlazaReplay>>,
+        _folds: Vec<()>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
         let (dir, r) = match (&p.data, records.first_mut().and_then(|b| b.pop())) {

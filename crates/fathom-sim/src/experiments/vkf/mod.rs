@@ -29,8 +29,6 @@ use crate::experiment::{Analysis, Batch, Environment, Experiment};
 pub struct Prepared {
     c: Checked,
     shared: Shared,
-    /// Wall-clock time of building the shared truth, s (reported).
-    truth_time: f64,
 }
 
 /// The `vkf` experiment.
@@ -45,6 +43,8 @@ impl Experiment for Vkf {
     type Checked = Checked;
     type Prepared = Prepared;
     type Record = RunOutput;
+    type Kept = Self::Record;
+    type Fold = ();
 
     const NAME: &'static str = "vkf";
     const SEED_DOC: &'static str = "002_cdb9d2284a7eb080.txt";
@@ -57,13 +57,8 @@ impl Experiment for Vkf {
     }
 
     fn prepare(&self, c: Checked, _env: &Environment) -> Result<Prepared, SimError> {
-        let started = std::time::Instant::now();
         let shared = sim::build_shared(&c)?;
-        Ok(Prepared {
-            c,
-            shared,
-            truth_time: started.elapsed().as_secs_f64(),
-        })
+        Ok(Prepared { c, shared })
     }
 
     fn batches(&self, p: &Prepared) -> Vec<Batch> {
@@ -88,10 +83,22 @@ impl Experiment for Vkf {
         }
     }
 
+    fn fold(
+        &self,
+        _prepared: &Prepared,
+        _batch: usize,
+        _index: usize,
+        record: Self::Record,
+        _fold: &mut (),
+    ) -> Self::Record {
+        record
+    }
+
     fn analyse(
         &self,
         p: &Prepared,
         mut records: Vec<Vec<RunOutput>>,
+        _folds: Vec<()>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
         let literal = if records.len() > LITERAL {

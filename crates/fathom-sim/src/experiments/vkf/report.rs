@@ -181,7 +181,7 @@ fn decisions(p: &Prepared) -> String {
          {} deg, {} m/s accelerating to {} kn over {} s, {} coordinated turns of {}-{} \
          deg/s), sampled at {:.0} Hz; the error-free IMU increments are the exact inverse of \
          the strapdown algorithm (Earth rate, transport rate, Coriolis, normal gravity). \
-         Truth and increments are computed once and shared by all runs ({:.1} s).\n\
+         Truth and increments are computed once and shared by all runs.\n\
          - Seabed: a piecewise-linear profile along the track (`fathom-traj` \
          `SeabedProfile`), knots {}; the DVL loses bottom lock where the altitude exceeds \
          {} m (the invalid intervals above).\n\
@@ -232,7 +232,6 @@ fn decisions(p: &Prepared) -> String {
         rate_lo,
         rate_hi,
         1.0 / c.dt,
-        p.truth_time,
         knots.join(", "),
         sc.dvl.range_m,
         imu.gyro_bias_deg_per_hr,

@@ -17,7 +17,7 @@ use super::settings::{Calibration, OutlierHandling, PlazaSettings, Variant};
 use crate::SimError;
 
 /// The result of one method on the log.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MethodRun {
     /// Method name (`DR`, `AS`, `SC-no-bias`, ...).
     pub name: String,

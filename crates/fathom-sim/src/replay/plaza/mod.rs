@@ -46,7 +46,7 @@ use crate::SimError;
 use crate::data::plaza::{BeaconSite, PlazaLog};
 
 /// Everything a Plaza replay produced.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PlazaReplay {
     /// The settings used.
     pub settings: PlazaSettings,

@@ -8,7 +8,7 @@ use crate::SimError;
 use crate::data::plaza::PlazaLog;
 
 /// A range observation on relative time.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PreparedRange {
     /// `t - t0`, s.
     pub time: f64,
@@ -21,7 +21,7 @@ pub struct PreparedRange {
 }
 
 /// The log turned into filter events on relative time (module docs).
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PreparedLog {
     /// Absolute start time `t0` (first ground-truth row), s.
     pub t0: f64,

@@ -6,7 +6,7 @@ use crate::data::plaza::{BeaconSite, PlazaLog, PoseRecord};
 
 /// Range errors measured against ground truth. Used only to describe the data in the
 /// report; the filters never see it.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RangeAnalysis {
     /// Ranges inside the ground-truth time span.
     pub n: usize,

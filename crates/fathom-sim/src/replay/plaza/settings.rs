@@ -176,7 +176,7 @@ pub struct AblationToml {
 }
 
 /// The range calibration states of the filter.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum Calibration {
     /// `h = |p - b|`: ranges taken at face value.
     None,
@@ -207,7 +207,7 @@ impl Calibration {
 }
 
 /// Checked settings of a Plaza replay.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PlazaSettings {
     /// `[data] dir`.
     pub data_dir: String,
@@ -401,7 +401,7 @@ pub fn parse_settings(text: &str, file: &str) -> Result<PlazaSettings, SimError>
 }
 
 /// Outlier handling of a variant.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub enum OutlierHandling {
     /// Huber down-weighting, hard rejection at `reject_sigma`, lock-out recovery.
     Robust,
@@ -410,7 +410,7 @@ pub enum OutlierHandling {
 }
 
 /// One filter configuration that is run.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Variant {
     /// Method name in the summary (`AS`, `SC-no-bias`, ...).
     pub name: String,
