@@ -1,0 +1,274 @@
+//! The one ray-triangle test both casters use (the BVH caster and the brute-force
+//! oracle), the hit selection rule, and the conservative ray-box test of the BVH.
+//!
+//! Ray-triangle: Moeller-Trumbore in `f64`, edges and corners included
+//! (`u >= 0, v >= 0, u + v <= 1`); a ray parallel to the triangle's plane
+//! (`det == 0`) misses it; every comparison is written so that NaN means "miss".
+//! A hit counts when `MIN_RANGE < t <= limit`. Selection: the smallest `t` wins, ties
+//! at exactly equal `t` go to the lower triangle index ([`Best::offer`]). Because both
+//! casters run this same code on the same triangles, they agree exactly as long as
+//! the BVH never prunes a box that holds a hit, which [`RayBoxTest`] guarantees by
+//! widening every box interval by a relative 1e-9 (plus 1e-9 m).
+
+use fathom_core::raycast::{MIN_RANGE, Ray};
+use fathom_core::{Material, RayHit};
+use nalgebra::Vector3;
+
+use crate::TriMesh;
+
+/// A triangle prepared for the ray test: first corner and the two edges from it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct PreparedTriangle {
+    v0: [f64; 3],
+    e1: [f64; 3],
+    e2: [f64; 3],
+}
+
+#[inline(always)]
+fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+#[inline(always)]
+fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline(always)]
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+impl PreparedTriangle {
+    /// From the three corners.
+    pub(crate) fn new(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>) -> Self {
+        let v0 = [a.x, a.y, a.z];
+        Self {
+            v0,
+            e1: sub(&[b.x, b.y, b.z], &v0),
+            e2: sub(&[c.x, c.y, c.z], &v0),
+        }
+    }
+
+    /// The range `t` of the hit of `o + t d` (`d` unit), if `MIN_RANGE < t <= limit`.
+    #[inline(always)]
+    pub(crate) fn hit(&self, o: &[f64; 3], d: &[f64; 3], limit: f64) -> Option<f64> {
+        let p = cross(d, &self.e2);
+        let det = dot(&self.e1, &p);
+        if det == 0.0 {
+            return None;
+        }
+        let inv = 1.0 / det;
+        let s = sub(o, &self.v0);
+        let u = dot(&s, &p) * inv;
+        if !(u >= 0.0 && u <= 1.0) {
+            return None;
+        }
+        let q = cross(&s, &self.e1);
+        let v = dot(d, &q) * inv;
+        if !(v >= 0.0 && u + v <= 1.0) {
+            return None;
+        }
+        let t = dot(&self.e2, &q) * inv;
+        (t > MIN_RANGE && t <= limit).then_some(t)
+    }
+}
+
+/// The closest hit found so far (module selection rule).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Best {
+    /// Range of the best hit, or the ray's `max_range` while there is none.
+    pub(crate) t: f64,
+    /// Triangle of the best hit, `u32::MAX` while there is none.
+    pub(crate) triangle: u32,
+}
+
+impl Best {
+    /// No hit yet; hits up to `max_range` count.
+    #[inline(always)]
+    pub(crate) fn new(max_range: f64) -> Self {
+        Self {
+            t: max_range,
+            triangle: u32::MAX,
+        }
+    }
+
+    /// Tests triangle `index` and keeps it if it is the better hit.
+    #[inline(always)]
+    pub(crate) fn offer(&mut self, tri: &PreparedTriangle, index: u32, o: &[f64; 3], d: &[f64; 3]) {
+        if let Some(t) = tri.hit(o, d, self.t)
+            && (t < self.t || index < self.triangle)
+        {
+            self.t = t;
+            self.triangle = index;
+        }
+    }
+
+    /// The hit, if any.
+    pub(crate) fn found(&self) -> Option<(f64, u32)> {
+        (self.triangle != u32::MAX).then_some((self.t, self.triangle))
+    }
+}
+
+/// A mesh prepared for casting: the triangles, their unit normals and materials.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct PreparedMesh {
+    pub(crate) triangles: Vec<PreparedTriangle>,
+    normals: Vec<Vector3<f64>>,
+    materials: Vec<Material>,
+}
+
+impl PreparedMesh {
+    pub(crate) fn new(mesh: &TriMesh) -> Self {
+        let mut triangles = Vec::with_capacity(mesh.len());
+        let mut normals = Vec::with_capacity(mesh.len());
+        for i in 0..mesh.len() {
+            let [a, b, c] = mesh.corners(i);
+            triangles.push(PreparedTriangle::new(&a, &b, &c));
+            // not degenerate (TriMesh's rule), so the cross product is non-zero
+            normals.push((b - a).cross(&(c - a)).normalize());
+        }
+        Self {
+            triangles,
+            normals,
+            materials: mesh.materials().to_vec(),
+        }
+    }
+
+    /// The checked ray as arrays (origin, unit direction, max range), or `None` for an
+    /// invalid ray (fathom_core::raycast rules).
+    #[inline(always)]
+    pub(crate) fn ray(
+        origin: &Vector3<f64>,
+        dir: &Vector3<f64>,
+        max_range: f64,
+    ) -> Option<([f64; 3], [f64; 3], f64)> {
+        let d = Ray::new(*origin, *dir, max_range).unit_dir()?;
+        Some(([origin.x, origin.y, origin.z], [d.x, d.y, d.z], max_range))
+    }
+
+    /// The hit record of the selected triangle.
+    #[inline(always)]
+    pub(crate) fn hit_record(&self, best: &Best, d: &[f64; 3]) -> Option<RayHit> {
+        let (range, triangle) = best.found()?;
+        let n = self.normals[triangle as usize];
+        let facing = if n.x * d[0] + n.y * d[1] + n.z * d[2] > 0.0 {
+            -n
+        } else {
+            n
+        };
+        Some(RayHit {
+            range,
+            triangle,
+            material: self.materials[triangle as usize],
+            normal_in_nav: facing,
+        })
+    }
+}
+
+/// A ray prepared for box tests: origin and reciprocal direction. A zero direction
+/// component gets a reciprocal of `+-1e300` instead of infinity, so that a box face
+/// through the origin gives `0 * 1e300 = 0`, never `0 * inf = NaN`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct RayBoxTest {
+    o: [f64; 3],
+    inv: [f64; 3],
+}
+
+/// Relative and absolute widening of the box intervals (see the module doc).
+const BOX_SLACK: f64 = 1e-9;
+
+impl RayBoxTest {
+    /// For the ray `o + t d`.
+    #[inline(always)]
+    pub(crate) fn new(o: &[f64; 3], d: &[f64; 3]) -> Self {
+        let r = |x: f64| {
+            if x.abs() > 1e-300 {
+                1.0 / x
+            } else {
+                1e300f64.copysign(x)
+            }
+        };
+        Self {
+            o: *o,
+            inv: [r(d[0]), r(d[1]), r(d[2])],
+        }
+    }
+
+    /// A lower bound of the range at which the ray enters the box `[lo, hi]`
+    /// (widened), or `f64::MAX` when the widened box is missed or behind the origin.
+    #[inline(always)]
+    pub(crate) fn entry(&self, lo: &[f64; 3], hi: &[f64; 3]) -> f64 {
+        let mut near = f64::NEG_INFINITY;
+        let mut far = f64::INFINITY;
+        for k in 0..3 {
+            let a = (lo[k] - self.o[k]) * self.inv[k];
+            let b = (hi[k] - self.o[k]) * self.inv[k];
+            near = near.max(a.min(b));
+            far = far.min(a.max(b));
+        }
+        let near = near - BOX_SLACK * (1.0 + near.abs());
+        let far = far + BOX_SLACK * (1.0 + far.abs());
+        if near <= far && far >= 0.0 {
+            near
+        } else {
+            f64::MAX
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tri() -> PreparedTriangle {
+        PreparedTriangle::new(
+            &Vector3::new(0.0, 0.0, 5.0),
+            &Vector3::new(1.0, 0.0, 5.0),
+            &Vector3::new(0.0, 1.0, 5.0),
+        )
+    }
+
+    #[test]
+    fn hits_inside_edges_and_corners_and_misses_outside() {
+        let d = [0.0, 0.0, 1.0];
+        assert_eq!(tri().hit(&[0.2, 0.2, 0.0], &d, 10.0), Some(5.0));
+        assert_eq!(tri().hit(&[0.5, 0.5, 0.0], &d, 10.0), Some(5.0)); // hypotenuse
+        assert_eq!(tri().hit(&[0.0, 0.0, 0.0], &d, 10.0), Some(5.0)); // corner
+        assert_eq!(tri().hit(&[0.6, 0.6, 0.0], &d, 10.0), None);
+        assert_eq!(tri().hit(&[0.2, 0.2, 0.0], &d, 4.0), None); // beyond limit
+        assert_eq!(tri().hit(&[0.2, 0.2, 6.0], &d, 10.0), None); // behind
+        assert_eq!(tri().hit(&[0.2, 0.2, 5.0], &d, 10.0), None); // starts on it
+        assert_eq!(tri().hit(&[0.2, 0.2, 0.0], &[1.0, 0.0, 0.0], 10.0), None); // parallel
+        assert_eq!(tri().hit(&[f64::NAN, 0.2, 0.0], &d, 10.0), None);
+    }
+
+    #[test]
+    fn ties_go_to_the_lower_index() {
+        let mut b = Best::new(10.0);
+        let (o, d) = ([0.2, 0.2, 0.0], [0.0, 0.0, 1.0]);
+        b.offer(&tri(), 7, &o, &d);
+        b.offer(&tri(), 3, &o, &d);
+        b.offer(&tri(), 5, &o, &d);
+        assert_eq!(b.found(), Some((5.0, 3)));
+        assert_eq!(Best::new(1.0).found(), None);
+    }
+
+    #[test]
+    fn box_test_is_conservative_on_faces_and_zero_components() {
+        let lo = [0.0, 0.0, 5.0];
+        let hi = [1.0, 1.0, 5.0]; // flat box
+        let r = RayBoxTest::new(&[0.0, 0.5, 0.0], &[0.0, 0.0, 1.0]); // in the x = 0 face plane
+        assert!(r.entry(&lo, &hi) <= 5.0);
+        let r = RayBoxTest::new(&[-0.1, 0.5, 0.0], &[0.0, 0.0, 1.0]);
+        assert_eq!(r.entry(&lo, &hi), f64::MAX);
+        let r = RayBoxTest::new(&[0.5, 0.5, 6.0], &[0.0, 0.0, 1.0]); // behind
+        assert_eq!(r.entry(&lo, &hi), f64::MAX);
+        let r = RayBoxTest::new(&[0.5, 0.5, 0.0], &[0.0, 0.0, -1.0]);
+        assert_eq!(r.entry(&lo, &hi), f64::MAX);
+    }
+}
