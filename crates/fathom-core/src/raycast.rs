@@ -86,12 +86,14 @@ impl Ray {
     pub fn unit_dir(&self) -> Option<Vector3<f64>> {
         let finite = self.origin_in_nav.iter().all(|c| c.is_finite())
             && self.dir_in_nav.iter().all(|c| c.is_finite());
-        // `!(x > 0)` is true for NaN too
-        if !finite || !(self.max_range > 0.0) {
+        // false for NaN too
+        let positive_range = self.max_range > 0.0;
+        if !finite || !positive_range {
             return None;
         }
         let norm = self.dir_in_nav.norm();
-        if !(norm > 0.0 && norm.is_finite()) {
+        let usable = norm > 0.0 && norm.is_finite();
+        if !usable {
             return None;
         }
         Some(self.dir_in_nav / norm)

@@ -86,7 +86,8 @@ impl TriMesh {
         }
         for (index, v) in vertices.iter().enumerate() {
             for &value in v.iter() {
-                if !(value.abs() <= MAX_COORD) {
+                let in_range = value.abs() <= MAX_COORD; // false for NaN
+                if !in_range {
                     return Err(MapError::BadVertex {
                         index,
                         value,
@@ -172,7 +173,8 @@ pub fn is_degenerate(a: &Vector3<f64>, b: &Vector3<f64>, c: &Vector3<f64>) -> bo
         .max(e2.norm_squared())
         .max(e3.norm_squared());
     let area2 = e1.cross(&e2).norm();
-    !(area2 > 1e-12 * l2)
+    let proper = area2 > 1e-12 * l2; // false for NaN
+    !proper
 }
 
 fn clean(

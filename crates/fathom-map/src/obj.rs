@@ -241,7 +241,7 @@ fn check_vertex<'a>(
         p = p.map(|c| c / w);
     }
     let ned = settings.to_ned(&p);
-    if let Some(bad) = ned.iter().find(|c| !(c.abs() <= MAX_COORD)) {
+    if let Some(bad) = ned.iter().find(|c| c.is_nan() || c.abs() > MAX_COORD) {
         return Err(MapError::ObjLine {
             line,
             reason: format!(

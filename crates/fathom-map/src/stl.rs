@@ -74,7 +74,7 @@ pub fn parse_stl(
         let mut corners = [nalgebra::Vector3::zeros(); 3];
         for (k, v) in t.vertices.iter().enumerate() {
             let p = settings.to_ned(&[f64::from(v[0]), f64::from(v[1]), f64::from(v[2])]);
-            if let Some(bad) = p.iter().find(|c| !(c.abs() <= MAX_COORD)) {
+            if let Some(bad) = p.iter().find(|c| c.is_nan() || c.abs() > MAX_COORD) {
                 return Err(MapError::StlFace {
                     face,
                     reason: format!(

@@ -4,11 +4,14 @@
 //! Ray-triangle: Moeller-Trumbore in `f64`, edges and corners included
 //! (`u >= 0, v >= 0, u + v <= 1`); a ray parallel to the triangle's plane
 //! (`det == 0`) misses it; every comparison is written so that NaN means "miss".
-//! A hit counts when `MIN_RANGE < t <= limit`. Selection: the smallest `t` wins, ties
+//! A hit counts when `MIN_RANGE < t <= limit` and the hit point `o + t d` lies in the
+//! triangle's bounding box widened by `1e-10 (1 + |c|)` (a ray nearly in the plane
+//! gets a `t` of rounding noise; this keeps such hits on the triangle). Selection: the smallest `t` wins, ties
 //! at exactly equal `t` go to the lower triangle index ([`Best::offer`]). Because both
 //! casters run this same code on the same triangles, they agree exactly as long as
-//! the BVH never prunes a box that holds a hit, which [`RayBoxTest`] guarantees by
-//! widening every box interval by a relative 1e-9 (plus 1e-9 m).
+//! the BVH never prunes a box that holds a hit: its boxes are widened in space
+//! ([`widen_box`]) well beyond the band where this test accepts hit points, and its
+//! ray-box test is conservative (`bvh.rs`).
 
 use fathom_core::raycast::{MIN_RANGE, Ray};
 use fathom_core::{Material, RayHit};
@@ -16,12 +19,23 @@ use nalgebra::Vector3;
 
 use crate::TriMesh;
 
+/// Widening of a triangle's box for the hit-point check of [`PreparedTriangle::hit`]:
+/// a tenth of [`BOX_SLACK`], the rest is margin for the rounding of `o + t d` (enough
+/// for ray origins within about `4e6 (1 + |c|)` m of a box coordinate `c`).
+const HIT_SLACK: f64 = 1e-10;
+
 /// A triangle prepared for the ray test: first corner and the two edges from it.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(crate) struct PreparedTriangle {
     v0: [f64; 3],
     e1: [f64; 3],
     e2: [f64; 3],
+}
+
+/// `lo <= x <= hi`, false when any is NaN.
+#[inline(always)]
+fn within(x: f64, lo: f64, hi: f64) -> bool {
+    x >= lo && x <= hi
 }
 
 #[inline(always)]
@@ -65,16 +79,36 @@ impl PreparedTriangle {
         let inv = 1.0 / det;
         let s = sub(o, &self.v0);
         let u = dot(&s, &p) * inv;
-        if !(u >= 0.0 && u <= 1.0) {
+        if !within(u, 0.0, 1.0) {
             return None;
         }
         let q = cross(&s, &self.e1);
         let v = dot(d, &q) * inv;
-        if !(v >= 0.0 && u + v <= 1.0) {
+        let inside = v >= 0.0 && u + v <= 1.0; // false for NaN
+        if !inside {
             return None;
         }
         let t = dot(&self.e2, &q) * inv;
-        (t > MIN_RANGE && t <= limit).then_some(t)
+        let in_range = t > MIN_RANGE && t <= limit; // false for NaN
+        if !in_range {
+            return None;
+        }
+        // a ray (nearly) in the triangle's plane gets a `t` made of rounding noise:
+        // the hit point must lie in the triangle's box, widened by a tenth of the BVH
+        // boxes' widening, so that the BVH never culls a hit this test accepts
+        for k in 0..3 {
+            let (a, b, c) = (self.v0[k], self.v0[k] + self.e1[k], self.v0[k] + self.e2[k]);
+            let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+            let p = o[k] + t * d[k];
+            if !within(
+                p,
+                lo - HIT_SLACK * (1.0 + lo.abs()),
+                hi + HIT_SLACK * (1.0 + hi.abs()),
+            ) {
+                return None;
+            }
+        }
+        Some(t)
     }
 }
 
@@ -170,55 +204,17 @@ impl PreparedMesh {
     }
 }
 
-/// A ray prepared for box tests: origin and reciprocal direction. A zero direction
-/// component gets a reciprocal of `+-1e300` instead of infinity, so that a box face
-/// through the origin gives `0 * 1e300 = 0`, never `0 * inf = NaN`.
-#[derive(Debug, Clone, Copy)]
-pub(crate) struct RayBoxTest {
-    o: [f64; 3],
-    inv: [f64; 3],
-}
+/// Relative widening of the BVH boxes in space ([`widen_box`]).
+pub(crate) const BOX_SLACK: f64 = 1e-9;
 
-/// Relative and absolute widening of the box intervals (see the module doc).
-const BOX_SLACK: f64 = 1e-9;
-
-impl RayBoxTest {
-    /// For the ray `o + t d`.
-    #[inline(always)]
-    pub(crate) fn new(o: &[f64; 3], d: &[f64; 3]) -> Self {
-        let r = |x: f64| {
-            if x.abs() > 1e-300 {
-                1.0 / x
-            } else {
-                1e300f64.copysign(x)
-            }
-        };
-        Self {
-            o: *o,
-            inv: [r(d[0]), r(d[1]), r(d[2])],
-        }
-    }
-
-    /// A lower bound of the range at which the ray enters the box `[lo, hi]`
-    /// (widened), or `f64::MAX` when the widened box is missed or behind the origin.
-    #[inline(always)]
-    pub(crate) fn entry(&self, lo: &[f64; 3], hi: &[f64; 3]) -> f64 {
-        let mut near = f64::NEG_INFINITY;
-        let mut far = f64::INFINITY;
-        for k in 0..3 {
-            let a = (lo[k] - self.o[k]) * self.inv[k];
-            let b = (hi[k] - self.o[k]) * self.inv[k];
-            near = near.max(a.min(b));
-            far = far.min(a.max(b));
-        }
-        let near = near - BOX_SLACK * (1.0 + near.abs());
-        let far = far + BOX_SLACK * (1.0 + far.abs());
-        if near <= far && far >= 0.0 {
-            near
-        } else {
-            f64::MAX
-        }
-    }
+/// Widens `[lo, hi]` in space by `1e-9 (1 + |c|)` per coordinate `c`: ten times the
+/// band in which [`PreparedTriangle::hit`] accepts a hit point around its triangle's
+/// box, so the hit of any accepted triangle lies strictly inside every box above it.
+pub(crate) fn widen_box(lo: &Vector3<f64>, hi: &Vector3<f64>) -> (Vector3<f64>, Vector3<f64>) {
+    (
+        lo.map(|c| c - BOX_SLACK * (1.0 + c.abs())),
+        hi.map(|c| c + BOX_SLACK * (1.0 + c.abs())),
+    )
 }
 
 #[cfg(test)]
@@ -256,19 +252,5 @@ mod tests {
         b.offer(&tri(), 5, &o, &d);
         assert_eq!(b.found(), Some((5.0, 3)));
         assert_eq!(Best::new(1.0).found(), None);
-    }
-
-    #[test]
-    fn box_test_is_conservative_on_faces_and_zero_components() {
-        let lo = [0.0, 0.0, 5.0];
-        let hi = [1.0, 1.0, 5.0]; // flat box
-        let r = RayBoxTest::new(&[0.0, 0.5, 0.0], &[0.0, 0.0, 1.0]); // in the x = 0 face plane
-        assert!(r.entry(&lo, &hi) <= 5.0);
-        let r = RayBoxTest::new(&[-0.1, 0.5, 0.0], &[0.0, 0.0, 1.0]);
-        assert_eq!(r.entry(&lo, &hi), f64::MAX);
-        let r = RayBoxTest::new(&[0.5, 0.5, 6.0], &[0.0, 0.0, 1.0]); // behind
-        assert_eq!(r.entry(&lo, &hi), f64::MAX);
-        let r = RayBoxTest::new(&[0.5, 0.5, 0.0], &[0.0, 0.0, -1.0]);
-        assert_eq!(r.entry(&lo, &hi), f64::MAX);
     }
 }
