@@ -54,7 +54,11 @@ fn ray_for(mesh: &TriMesh, kind: u8, a: Vector3<f64>, u: f64, v: f64, pick: usiz
     }
     let [p, q, r] = mesh.corners(pick % mesh.len());
     let on_surface = p + (q - p) * u * (1.0 - v) + (r - p) * v;
-    let max = if pick.is_multiple_of(3) { 3.0 } else { f64::INFINITY };
+    let max = if pick.is_multiple_of(3) {
+        3.0
+    } else {
+        f64::INFINITY
+    };
     match kind % 6 {
         0 => Ray::new(a, on_surface - a + axis(pick) * 0.1, max),
         1 => Ray::new(on_surface, a - on_surface, max), // starts on a surface

@@ -45,11 +45,16 @@
 //! Modules: [`schedule`] (Table 2-3 clocks), [`noise`] (white, held common-mode,
 //! outliers, bias, scale factor, Gauss-Markov, random walk), [`models`] (DVL, AHRS,
 //! range, depth), [`suite`] (the beacons-paper generator and its design
-//! covariance), [`integrated`] (INS and DVL dead reckoning).
+//! covariance), [`integrated`] (INS and DVL dead reckoning); against a map (through
+//! [`fathom_core::RayCaster`], so without depending on the map crate):
+//! [`map_range`] (range finders and the lidar), [`gnss`] (constellation, line of
+//! sight, pseudoranges, Doppler, single-point positioning, BESTPOS).
 
 pub mod error;
+pub mod gnss;
 pub mod inertial;
 pub mod integrated;
+pub mod map_range;
 pub mod models;
 pub mod noise;
 pub mod schedule;
