@@ -109,6 +109,28 @@ pub enum MapError {
     },
 }
 
+impl MapError {
+    /// This error as met reading the file `file` (the readers take bytes; the caller
+    /// that opened the file names it).
+    pub fn in_file(self, file: impl Into<String>) -> FileError {
+        FileError {
+            file: file.into(),
+            error: self,
+        }
+    }
+}
+
+/// A [`MapError`] with the name of the file it came from: `` `file`: error ``.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("`{file}`: {error}")]
+pub struct FileError {
+    /// The file's name or path, as the caller gave it.
+    pub file: String,
+    /// What went wrong.
+    #[source]
+    pub error: MapError,
+}
+
 /// Checks that `value` is finite and `> 0`.
 pub(crate) fn check_positive(field: &str, value: f64) -> Result<f64, MapError> {
     if value.is_finite() && value > 0.0 {

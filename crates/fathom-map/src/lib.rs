@@ -36,6 +36,6 @@ mod triangle;
 
 pub use brute::BruteForceCaster;
 pub use bvh::{BvhBuild, BvhCaster};
-pub use error::MapError;
+pub use error::{FileError, MapError};
 pub use import::{AxisConvention, ImportReport, ImportSettings, MaterialTable};
 pub use mesh::{MeshBuilder, MeshReport, TriMesh};
