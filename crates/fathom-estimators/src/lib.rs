@@ -94,6 +94,7 @@ pub mod integrated_nav;
 pub mod kalman;
 pub(crate) mod lanes;
 pub(crate) mod linalg;
+pub mod map_aided;
 pub mod models;
 pub mod noise;
 pub mod robust;
