@@ -78,14 +78,6 @@ pub(crate) struct LikelihoodStats {
     pub hits: usize,
 }
 
-fn log_add_exp(a: f64, b: f64) -> f64 {
-    let m = a.max(b);
-    if m == f64::NEG_INFINITY {
-        return m;
-    }
-    m + ((a - m).exp() + (b - m).exp()).ln()
-}
-
 impl LikelihoodModel<'_> {
     /// The candidate pose (position, attitude matrix) and the pose-moving linear
     /// states at `n`.
@@ -109,13 +101,13 @@ impl LikelihoodModel<'_> {
     ) -> LikelihoodStats {
         let nb = self.beams.len();
         let eps = self.outlier_probability;
-        let ln_keep = (1.0 - eps).ln();
-        let ln_outlier = (eps.max(1e-9) / self.max_range).ln();
-        let ln_tail = if eps > 0.0 {
-            (eps / self.max_range).ln()
-        } else {
-            f64::NEG_INFINITY
-        };
+        // linear domain (one exp and one sqrt per beam, one ln per 8 beams) when the
+        // tail keeps every factor >= eps / max_range; log domain without a tail
+        let linear = eps > 0.0;
+        let keep_norm = (1.0 - eps) / (2.0 * std::f64::consts::PI).sqrt();
+        let tail = eps / self.max_range;
+        let outlier = eps.max(1e-9) / self.max_range;
+        let ln_outlier = outlier.ln();
         let half_ln_2pi = 0.5 * (2.0 * std::f64::consts::PI).ln();
         let mut stats = LikelihoodStats::default();
         for (chunk, out_chunk) in points
@@ -131,16 +123,25 @@ impl LikelihoodModel<'_> {
                         .map(|d| Ray::new(pos, c * d, self.max_range)),
                 );
             }
-            buf.hits.clear();
+            // every slot is written by the cast: no clearing
             buf.hits.resize(buf.rays.len(), None);
             let _ = caster.cast_batch(&buf.rays, &mut buf.hits);
             stats.rays += buf.rays.len();
             for (k, (n, o)) in chunk.iter().zip(out_chunk.iter_mut()).enumerate() {
                 let mut ll = 0.0;
+                let mut prod: f64 = 1.0;
                 let base = k * nb;
                 for j in 0..nb {
+                    if linear && j % 8 == 7 {
+                        ll += prod.ln();
+                        prod = 1.0;
+                    }
                     let Some(hit) = &buf.hits[base + j] else {
-                        ll += ln_outlier;
+                        if linear {
+                            prod *= outlier;
+                        } else {
+                            ll += ln_outlier;
+                        }
                         continue;
                     };
                     stats.hits += 1;
@@ -160,9 +161,13 @@ impl LikelihoodModel<'_> {
                         + g.dot(&(self.pose_cov * g))
                         + h_n.component_mul(&h_n).dot(&self.kernel_var);
                     let nu = beam.range_m - hit.range;
-                    let gauss = ln_keep - 0.5 * nu * nu / s2 - 0.5 * s2.ln() - half_ln_2pi;
-                    ll += log_add_exp(gauss, ln_tail);
+                    if linear {
+                        prod *= keep_norm * (-0.5 * nu * nu / s2).exp() / s2.sqrt() + tail;
+                    } else {
+                        ll += -0.5 * nu * nu / s2 - 0.5 * s2.ln() - half_ln_2pi;
+                    }
                 }
+                ll += prod.ln();
                 if let Some(b) = self.baro {
                     let lin = self.pose_base + self.pose_slope * (n - self.mu_n);
                     let height = -(self.pos_hat.z - lin.x);
@@ -274,10 +279,32 @@ mod tests {
         let st = m.evaluate(&pts, &mut out, &mut buf, &map);
         assert_eq!(st.rays, 18);
         assert!(out[0] > out[1] + 10.0 && out[0] > out[2], "{out:?}");
-        assert!((log_add_exp(0.0, 0.0) - 2f64.ln()).abs() < 1e-15);
-        assert_eq!(
-            log_add_exp(f64::NEG_INFINITY, f64::NEG_INFINITY),
-            f64::NEG_INFINITY
+        // the linear-domain product equals the sum of the logs of the robust terms
+        let (eps, r) = (0.05, 60.0);
+        let mut manual = 0.0;
+        let (pos, c, _) = m.pose(&pts[1]);
+        for (d, b) in dirs.iter().zip(&beams) {
+            let u = c * d;
+            let l = match map.cast(&pos, &u, r) {
+                None => eps / r,
+                Some(h) => {
+                    let q = h.normal_in_nav.dot(&u);
+                    let k = -h.range / q;
+                    let oxu = h.normal_in_nav.cross(&u);
+                    let g = Vector3::new(h.normal_in_nav.z / q, k * oxu.x, k * oxu.y);
+                    let s2 = b.sigma_m.powi(2) + g.dot(&(m.pose_cov * g));
+                    let nu = b.range_m - h.range;
+                    (1.0 - eps) * (-0.5 * nu * nu / s2).exp()
+                        / (2.0 * std::f64::consts::PI * s2).sqrt()
+                        + eps / r
+                }
+            };
+            manual += l.ln();
+        }
+        assert!(
+            (manual - out[1]).abs() < 1e-9 * manual.abs().max(1.0),
+            "{manual} {}",
+            out[1]
         );
     }
 }
