@@ -25,8 +25,9 @@
 //! - `Phi = exp(F dt) = I + F dt + F^2 dt^2 / 2` exactly (the second-order series
 //!   is not an approximation here), and
 //! - `Q_d = int_0^dt Phi(s) G Q_c G^T Phi(s)^T ds` is a polynomial in `dt`, evaluated
-//!   in closed form ([`discretize`]): the exact Van Loan integral for the held `F`,
-//!   tested against the Van Loan matrix exponential.
+//!   in closed form: the exact Van Loan integral for the held `F` ([`discretize`] for
+//!   any nilpotent `F` of order 3, tested against the Van Loan matrix exponential;
+//!   [`transition`], what the filter uses, writes the same numbers block by block).
 
 use nalgebra::{Matrix3, SMatrix, UnitQuaternion, Vector3};
 
@@ -102,16 +103,60 @@ pub fn discretize(f: &Matrix12, g: &NoiseInput, qc: &NoisePsd, dt: f64) -> (Matr
     (phi, (qd + qd.transpose()) * 0.5)
 }
 
-/// [`error_dynamics`] then [`discretize`] with the checked noise: the `Phi`, `Q_d` of
-/// one step of length `dt` starting at the given nominal attitude and specific force.
+/// `Phi`, `Q_d` of one step of length `dt` starting at the given nominal attitude and
+/// specific force: the numbers of [`error_dynamics`] + [`discretize`] (tested), from
+/// their 3 x 3 blocks. With `A = -[(C f) x]`, `C C^T = I` and
+/// `S = q_g A A^T + q_b I` (`A A^T = |C f|^2 I - (C f)(C f)^T`):
+///
+/// ```text
+/// Phi: pv = dt I, pa = dt^2/2 A, pb = dt^2/2 C, va = dt A, vb = dt C (I on the diagonal)
+/// Q_d: pp = q_a dt^3/3 I + S dt^5/20   pv = q_a dt^2/2 I + S dt^4/8   vv = q_a dt I + S dt^3/3
+///      pa = q_g dt^3/6 A   pb = q_b dt^3/6 C   va = q_g dt^2/2 A   vb = q_b dt^2/2 C
+///      aa = q_g dt I       bb = q_b dt I
+/// ```
 pub fn transition(
     nav_from_body: &UnitQuaternion<f64>,
     specific_force_in_body: &Vector3<f64>,
     noise: &ImuNoise,
     dt: f64,
 ) -> (Matrix12, Matrix12) {
-    let (f, g) = error_dynamics(nav_from_body, specific_force_in_body);
-    discretize(&f, &g, &noise_psd(noise), dt)
+    let c = nav_from_body.to_rotation_matrix().into_inner();
+    let f_nav = c * specific_force_in_body;
+    let a = -skew(&f_nav);
+    let eye = Matrix3::identity();
+    let (qa, qg, qb) = (noise.accel_psd, noise.gyro_psd, noise.accel_bias_psd);
+    let (dt2, dt3) = (dt * dt, dt * dt * dt);
+    let (dt4, dt5) = (dt2 * dt2, dt2 * dt3);
+    let aat = eye * f_nav.norm_squared() - f_nav * f_nav.transpose();
+    let s = aat * qg + eye * qb;
+
+    let mut phi = Matrix12::identity();
+    let mut set = |m: &mut Matrix12, r: usize, col: usize, b: &Matrix3<f64>| {
+        m.fixed_view_mut::<3, 3>(r, col).copy_from(b);
+    };
+    set(&mut phi, POS, VEL, &(eye * dt));
+    set(&mut phi, POS, ATT, &(a * (0.5 * dt2)));
+    set(&mut phi, POS, ACCEL_BIAS, &(c * (0.5 * dt2)));
+    set(&mut phi, VEL, ATT, &(a * dt));
+    set(&mut phi, VEL, ACCEL_BIAS, &(c * dt));
+
+    let mut qd = Matrix12::zeros();
+    let mut sym = |r: usize, col: usize, b: Matrix3<f64>| {
+        qd.fixed_view_mut::<3, 3>(r, col).copy_from(&b);
+        if r != col {
+            qd.fixed_view_mut::<3, 3>(col, r).copy_from(&b.transpose());
+        }
+    };
+    sym(POS, POS, eye * (qa * dt3 / 3.0) + s * (dt5 / 20.0));
+    sym(POS, VEL, eye * (qa * dt2 / 2.0) + s * (dt4 / 8.0));
+    sym(VEL, VEL, eye * (qa * dt) + s * (dt3 / 3.0));
+    sym(POS, ATT, a * (qg * dt3 / 6.0));
+    sym(POS, ACCEL_BIAS, c * (qb * dt3 / 6.0));
+    sym(VEL, ATT, a * (qg * dt2 / 2.0));
+    sym(VEL, ACCEL_BIAS, c * (qb * dt2 / 2.0));
+    sym(ATT, ATT, eye * (qg * dt));
+    sym(ACCEL_BIAS, ACCEL_BIAS, eye * (qb * dt));
+    (phi, (qd + qd.transpose()) * 0.5)
 }
 
 #[cfg(test)]
@@ -226,7 +271,11 @@ mod tests {
         let (f, g) = error_dynamics(&q, &f_body);
         let m = g * noise_psd(&noise) * g.transpose();
         for dt in [0.01, 0.2, 1.0] {
-            let (phi, qd) = transition(&q, &f_body, &noise, dt);
+            let (phi, qd) = discretize(&f, &g, &noise_psd(&noise), dt);
+            // the block form of `transition` gives the same numbers
+            let (phi_b, qd_b) = transition(&q, &f_body, &noise, dt);
+            assert!((phi - phi_b).amax() < 1e-14, "Phi blocks at {dt}");
+            assert!((qd - qd_b).amax() < 1e-14 * qd.amax(), "Q_d blocks at {dt}");
             let mut vl = SMatrix::<f64, 24, 24>::zeros();
             vl.fixed_view_mut::<12, 12>(0, 0).copy_from(&(-f * dt));
             vl.fixed_view_mut::<12, 12>(0, 12).copy_from(&(m * dt));
