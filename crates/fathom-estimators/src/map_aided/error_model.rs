@@ -131,7 +131,7 @@ pub fn transition(
     let s = aat * qg + eye * qb;
 
     let mut phi = Matrix12::identity();
-    let mut set = |m: &mut Matrix12, r: usize, col: usize, b: &Matrix3<f64>| {
+    let set = |m: &mut Matrix12, r: usize, col: usize, b: &Matrix3<f64>| {
         m.fixed_view_mut::<3, 3>(r, col).copy_from(b);
     };
     set(&mut phi, POS, VEL, &(eye * dt));
