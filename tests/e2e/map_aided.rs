@@ -510,7 +510,8 @@ fn wilson(successes: usize, n: usize) -> [f64; 2] {
 }
 
 /// Acceptance: error-free sensors (IMU, GPS, ranges, baro), each filter started at
-/// the truth stays at it over the 300 s `buildings` flight: INS + GPS (5 Hz), GREKF
+/// the truth stays at it over > 300 s of the `buildings` flight (after the 10 s rest on
+/// the ground): INS + GPS (5 Hz), GREKF
 /// (7 beams + baro, 10 Hz), MGPMF and particle filter (15 x 15 x 5 grid / 1125
 /// particles, 7 beams + baro, 2 Hz), and the switching filter (GPS/INS while >= 4 of 9
 /// sky directions are in line of sight, MGPMF otherwise). Tolerances (stated): the
@@ -519,7 +520,7 @@ fn wilson(successes: usize, n: usize) -> [f64; 2] {
 #[test]
 fn error_free_filters_stay_at_the_truth_over_the_buildings_flight() {
     let chain = fly(
-        PathParams::buildings_square(Vector3::zeros(), 100.0, 20.0, 3.0, 28.0),
+        PathParams::buildings_square(Vector3::zeros(), 100.0, 20.0, 3.0, 30.0),
         10.0,
         true,
         7,
@@ -530,9 +531,11 @@ fn error_free_filters_stay_at_the_truth_over_the_buildings_flight() {
         .mesh()
         .unwrap();
     let map = BvhCaster::new(&city);
-    let duration = chain.truth.last().unwrap().time;
+    let duration = chain.truth.last().unwrap().time - 10.0;
     assert!(duration >= 300.0, "{duration}");
-    // start when the vehicle leaves the ground (the down beam needs its minimum range)
+    // from the end of the 10 s rest on the ground: a sensor lying in the ground plane
+    // casts its horizontal beams along that plane (a degenerate geometry no real
+    // mounting has); the filtered part is still > 300 s
     let start = (10.0 / IMU_DT) as usize;
     let sensors = Sensors {
         map: &map,
