@@ -14,6 +14,7 @@ mod fusion;
 mod fuzz_corpus;
 mod hardening;
 mod imu_allan;
+mod map_aided;
 mod noise;
 mod plaza;
 mod quadrotor_ins;

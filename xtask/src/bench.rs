@@ -1,12 +1,17 @@
-//! `cargo xtask bench [--compare] [FILTER]`: runs the criterion benchmarks of the
-//! workspace (`cargo bench --workspace`), collects criterion's estimates into
-//! `target/bench/bench.json` (`{"name", "ns_per_iter", "iters", ...}` per benchmark)
-//! and prints a table with the performance targets of `docs/performance.md`.
+//! `cargo xtask bench [--compare] [--mesh FILE] [FILTER]`: runs the criterion
+//! benchmarks of the workspace (`cargo bench --workspace`), collects criterion's
+//! estimates into `target/bench/bench.json` (`{"name", "ns_per_iter", "iters", ...}`
+//! per benchmark) and prints a table with the performance targets of
+//! `docs/performance.md` (with the ns per ray cast inside each map-aided update:
+//! `cargo xtask bench map_aided`). `--mesh FILE` hands an OBJ mesh (NED metres, as
+//! `shared/bench/raycast_ref.py` writes it) to the ray-casting bench through the
+//! `FATHOM_RAYCAST_MESH` environment variable (`raycast/mesh`). The target directory
+//! is `CARGO_TARGET_DIR` when set (where cargo and criterion write), else `target/`.
 //! `--compare` also times FilterPy's `KalmanFilter` on the identical 6-state /
 //! 3-measurement problem when `python3` and `filterpy` are installed (skipped with a
 //! message otherwise) and prints the ratio.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::SystemTime;
 
@@ -33,7 +38,7 @@ struct Target {
     bound_ns: f64,
 }
 
-const TARGETS: [Target; 3] = [
+const TARGETS: [Target; 4] = [
     Target {
         name: "kf_6x3_predict_update",
         what: "KF 6/3 predict+update",
@@ -49,18 +54,61 @@ const TARGETS: [Target; 3] = [
         what: "one vkf Monte Carlo run",
         bound_ns: 0.5e9,
     },
+    Target {
+        name: "map_aided/mgpmf_41x41x9_7beams",
+        what: "MGPMF update 41x41x9, 7 beams",
+        bound_ns: 25e6,
+    },
+];
+
+/// The map-aided updates of `fathom-sim/benches/map_aided.rs`, the bench casting the
+/// same rays alone, and the number of rays: ns per ray cast inside each update and
+/// the share of the update the casts take. The GREKF scan's ray count is what the
+/// bench prints (the beams with a return); the 109-beam scan returns 93 there.
+const RAY_SHARES: [(&str, &str, f64); 3] = [
+    (
+        "map_aided/grekf_109_beams",
+        "map_aided_rays/grekf_scan",
+        93.0,
+    ),
+    (
+        "map_aided/mgpmf_41x41x9_7beams",
+        "map_aided_rays/grid_41x41x9_7beams",
+        (41 * 41 * 9 * 7) as f64,
+    ),
+    (
+        "map_aided/particle_15129_7beams",
+        "map_aided_rays/grid_41x41x9_7beams",
+        (41 * 41 * 9 * 7) as f64,
+    ),
 ];
 
 /// Minimum Monte Carlo speed-up from 1 to 2 threads.
 const MIN_SPEEDUP: f64 = 1.7;
 
+/// The target directory: `CARGO_TARGET_DIR` (relative to the workspace root when
+/// relative) or `<root>/target`.
+pub fn target_dir(root: &Path) -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(d) if !d.is_empty() => root.join(PathBuf::from(d)),
+        _ => root.join("target"),
+    }
+}
+
 /// Runs the benchmarks and writes the report.
-pub fn run(root: &Path, compare: bool, filter: Option<&str>) -> Result<()> {
+pub fn run(root: &Path, compare: bool, mesh: Option<&Path>, filter: Option<&str>) -> Result<()> {
     let started = SystemTime::now();
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
     cmd.current_dir(root)
         .args(["bench", "--workspace", "--bench", "*", "--"]);
+    if let Some(m) = mesh {
+        let m = std::path::absolute(m).with_context(|| format!("mesh path {}", m.display()))?;
+        if !m.is_file() {
+            bail!("--mesh {}: no such file", m.display());
+        }
+        cmd.env("FATHOM_RAYCAST_MESH", m);
+    }
     if let Some(f) = filter {
         cmd.arg(f);
     }
@@ -68,7 +116,7 @@ pub fn run(root: &Path, compare: bool, filter: Option<&str>) -> Result<()> {
     if !status.success() {
         bail!("`cargo bench` failed ({status})");
     }
-    let criterion_dir = root.join("target").join("criterion");
+    let criterion_dir = target_dir(root).join("criterion");
     let mut results = collect(&criterion_dir, started)?;
     results.sort_by(|a, b| a.name.cmp(&b.name));
     if results.is_empty() {
@@ -77,7 +125,7 @@ pub fn run(root: &Path, compare: bool, filter: Option<&str>) -> Result<()> {
             criterion_dir.display()
         );
     }
-    let out_dir = root.join("target").join("bench");
+    let out_dir = target_dir(root).join("bench");
     std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let json_path = out_dir.join("bench.json");
     let entries: Vec<Value> = results
@@ -178,6 +226,31 @@ fn targets(results: &[BenchResult]) -> String {
                 "NOT met"
             }
         ));
+    }
+    for (name, what) in [
+        ("raycast/buildings", "closest-hit ray, buildings"),
+        ("raycast/mesh", "closest-hit ray, --mesh"),
+    ] {
+        if let Some(r) = find(results, name) {
+            s.push_str(&format!(
+                "  {what:<28} {:>10} per ray (fastest sample {}); Embree: run \
+                 shared/bench/raycast_ref.py on the same mesh (docs/performance.md)\n",
+                fmt_ns(r.ns_per_iter),
+                fmt_ns(r.min_ns_per_iter),
+            ));
+        }
+    }
+    for (update, rays, count) in RAY_SHARES {
+        if let (Some(u), Some(r)) = (find(results, update), find(results, rays)) {
+            s.push_str(&format!(
+                "  {:<28} {:>10} per update; {:.0} rays at {:.1} ns per ray cast = {:.0} % of it\n",
+                update.trim_start_matches("map_aided/"),
+                fmt_ns(u.ns_per_iter),
+                count,
+                r.ns_per_iter / count,
+                100.0 * r.ns_per_iter / u.ns_per_iter,
+            ));
+        }
     }
     if let (Some(kf), Some(reference)) = (
         find(results, "kf_6x3_predict_update"),
@@ -394,6 +467,26 @@ mod tests {
         let t = targets(&[kf, reference]);
         assert!(
             t.contains("0.50x by the median (150.0 ns vs 300.0 ns; fastest samples 0.70x)"),
+            "{t}"
+        );
+        let update = BenchResult {
+            name: "map_aided/mgpmf_41x41x9_7beams".into(),
+            ns_per_iter: 20e6,
+            min_ns_per_iter: 19e6,
+            iters: 1,
+        };
+        let rays = BenchResult {
+            name: "map_aided_rays/grid_41x41x9_7beams".into(),
+            ns_per_iter: 15e6,
+            ..update.clone()
+        };
+        let t = targets(&[update, rays]);
+        assert!(
+            t.contains("MGPMF update 41x41x9, 7 beams") && t.contains(": met"),
+            "{t}"
+        );
+        assert!(
+            t.contains("105903 rays at 141.6 ns per ray cast = 75 % of it"),
             "{t}"
         );
         assert!(table(&r).contains("grp/f"));

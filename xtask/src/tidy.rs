@@ -58,6 +58,8 @@ fn allowed_edges(architecture: &str) -> Edges {
         let Some((from, targets)) = rest.split_once("` -> ") else {
             continue;
         };
+        // A trailing `(...)` explains the line.
+        let targets = targets.split(" (").next().unwrap_or("");
         let set = targets
             .split(',')
             .map(|t| t.trim().trim_matches('`').to_string())

@@ -41,6 +41,10 @@
 //! assert!((fused.mean()[0] - 1.5).abs() < 1e-12 && (fused.cov()[(0, 0)] - 0.75).abs() < 1e-12);
 //! ```
 //!
+//! Map-aided navigation (seed 004) lives in [`map_aided`]: the 12-state error-state
+//! INS with GPS/INS, GREKF, MGPMF and particle-filter updates and the mode switching;
+//! it sees the map only through [`fathom_core::RayCaster`].
+//!
 //! Error convention: filter steps return [`EstimatorError`] variants carrying the
 //! filter time stamp; time-free helpers (fusion, [`gating::nis`], [`models`]) wrap a
 //! [`fathom_core::CoreError`]. Every failing step leaves the filter unchanged.
@@ -70,6 +74,7 @@
 //! | [`architectures::MeasurementFusion`] | `step`, `step_stacked` | error: sensor, index in its block, time | error with the time |
 //! | [`architectures::TrackToTrack`] | `step` | error: track, index, time | filter or fusion error with the time |
 //! | [`architectures::EqualizeFuseFeedback`] | `step` | error: track, sensor state / measurement, index, time | filter or fusion error with the time |
+//! | [`map_aided`] ([`map_aided::Ins12Filter`], [`map_aided::Grekf`], [`map_aided::Mgpmf`], [`map_aided::ParticleFilter`], [`map_aided::SwitchingFilter`]) | `predict`, `update_gps`, `update`, `update_map`, `observe_los` | error [`map_aided::MapAidedError`]: quantity, beam index, time; a pose from which no ray hits the map is [`map_aided::MapAidedError::PoseOutsideMap`] with the time (filter and particles unchanged) | error with the time |
 //! | [`fusion`], [`architectures::rules`], [`gating::nis`] (no notion of time) | `fuse_*`, `nis` | [`EstimatorError::Core`] (the architectures add the time) | [`EstimatorError::Core`] |
 //!
 //! A NaN NIS never passes a gate ([`GateThreshold::accepts`]). The INS crate
@@ -94,6 +99,7 @@ pub mod integrated_nav;
 pub mod kalman;
 pub(crate) mod lanes;
 pub(crate) mod linalg;
+pub mod map_aided;
 pub mod models;
 pub mod noise;
 pub mod robust;

@@ -1,0 +1,310 @@
+//! The range likelihood of candidate values of the nonlinear states (grid points of
+//! the MGPMF, particles of the particle filter), by batch ray casting.
+//!
+//! For a candidate `n = (dp_N, dp_E, psi_D)` the linear pose states take their
+//! conditional mean `(dp_D, psi_N, psi_E) = E[. | n]` ([`super::marginal`]); the
+//! candidate pose is the nominal corrected by that error (`p = p_hat - dp`,
+//! `C = exp(-[psi x]) C_hat`) and each beam is cast from it. A beam's likelihood is
+//! robust (the outlier probability `eps` of the settings, for returns the map does
+//! not explain: glass, clutter):
+//!
+//! ```text
+//! L = (1 - eps) N(z - r_hat; 0, s^2) + eps / max_range,   s^2 = sigma^2 + g P_pose|n g^T
+//! ```
+//!
+//! where `g` is the beam's row with respect to the linear pose states at that hit
+//! (eq. 16's `H^j`: the uncertainty of `l` given `n` widens each beam) and
+//! `P_pose|n` their conditional covariance. A grid point stands for its cell: the
+//! MGPMF adds `h_n Lambda h_n^T` to `s^2`, with `h_n` the beam's row for `n` and
+//! `Lambda = diag(spacing^2 / 6)` the covariance of the point's hat function (the
+//! interpolation kernel of eq. 17-18), the Gaussian approximation of the likelihood
+//! averaged over that kernel. Without it a grid coarser than the range noise (0.45 m
+//! cells against 5 cm ranges) weights points by how close they happen to fall to the
+//! truth and can prefer a far point of another mode. Particles have no cells
+//! (`Lambda = 0`: the standard bootstrap likelihood). A beam without a predicted hit has
+//! `L = max(eps, 1e-9) / max_range` (only an outlier explains it). The barometer,
+//! which sees only `dp_D`, adds a Gaussian factor with `s^2 = sigma_b^2 + P_DD|n`.
+//! Beams are treated as independent given `n` (the common linear states make them
+//! slightly correlated; the per-beam robust tail needs the factorization).
+//!
+//! Rays go through [`RayCaster::cast_batch`] in chunks of [`CHUNK_POINTS`] candidates
+//! (buffers reused across updates).
+
+use fathom_core::{Ray, RayCaster, RayHit};
+use nalgebra::{Matrix3, Rotation3, Vector3};
+
+use super::ins12::NominalNav;
+use super::range_model::{BaroHeight, RangeBeam};
+
+/// Candidates per batch of ray casts.
+pub const CHUNK_POINTS: usize = 256;
+
+/// Smallest `|o . u|` used in a likelihood row (a grazing hit's row is large, not
+/// infinite).
+const MIN_COS: f64 = 1e-3;
+
+/// The fixed inputs of one likelihood evaluation.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LikelihoodModel<'a> {
+    pub pos_hat: Vector3<f64>,
+    pub c_hat: Matrix3<f64>,
+    pub unit_dirs: &'a [Vector3<f64>],
+    pub beams: &'a [RangeBeam],
+    pub baro: Option<&'a BaroHeight>,
+    pub max_range: f64,
+    pub outlier_probability: f64,
+    /// `mu_n`, and `(dp_D, psi_N, psi_E)` at `n` = `pose_base + pose_slope (n - mu_n)`.
+    pub mu_n: Vector3<f64>,
+    pub pose_base: Vector3<f64>,
+    pub pose_slope: Matrix3<f64>,
+    /// Conditional covariance of `(dp_D, psi_N, psi_E)` given `n`.
+    pub pose_cov: Matrix3<f64>,
+    /// Diagonal covariance of the kernel each candidate stands for on `n` (the MGPMF's
+    /// hat function, `spacing^2 / 6` per axis; zero for particles).
+    pub kernel_var: Vector3<f64>,
+}
+
+/// Ray buffers of the likelihood (reused).
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RayBuffers {
+    rays: Vec<Ray>,
+    hits: Vec<Option<RayHit>>,
+}
+
+/// Totals of one evaluation.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub(crate) struct LikelihoodStats {
+    pub rays: usize,
+    pub hits: usize,
+}
+
+impl LikelihoodModel<'_> {
+    /// The candidate pose (position, attitude matrix) and the pose-moving linear
+    /// states at `n`.
+    #[inline]
+    fn pose(&self, n: &Vector3<f64>) -> (Vector3<f64>, Matrix3<f64>, Vector3<f64>) {
+        let lin = self.pose_base + self.pose_slope * (n - self.mu_n);
+        let pos = self.pos_hat - Vector3::new(n.x, n.y, lin.x);
+        let psi = Vector3::new(lin.y, lin.z, n.z);
+        let c = Rotation3::from_scaled_axis(-psi).into_inner() * self.c_hat;
+        (pos, c, lin)
+    }
+
+    /// Writes the log-likelihood of every candidate of `points` into `out`
+    /// (`out.len() == points.len()`).
+    pub fn evaluate(
+        &self,
+        points: &[Vector3<f64>],
+        out: &mut [f64],
+        buf: &mut RayBuffers,
+        caster: &dyn RayCaster,
+    ) -> LikelihoodStats {
+        let nb = self.beams.len();
+        let eps = self.outlier_probability;
+        // linear domain (one exp and one sqrt per beam, one ln per 8 beams) when the
+        // tail keeps every factor >= eps / max_range; log domain without a tail
+        let linear = eps > 0.0;
+        let keep_norm = (1.0 - eps) / (2.0 * std::f64::consts::PI).sqrt();
+        let tail = eps / self.max_range;
+        let outlier = eps.max(1e-9) / self.max_range;
+        let ln_outlier = outlier.ln();
+        let half_ln_2pi = 0.5 * (2.0 * std::f64::consts::PI).ln();
+        let mut stats = LikelihoodStats::default();
+        for (chunk, out_chunk) in points
+            .chunks(CHUNK_POINTS)
+            .zip(out.chunks_mut(CHUNK_POINTS))
+        {
+            buf.rays.clear();
+            for n in chunk {
+                let (pos, c, _) = self.pose(n);
+                buf.rays.extend(
+                    self.unit_dirs
+                        .iter()
+                        .map(|d| Ray::new(pos, c * d, self.max_range)),
+                );
+            }
+            // every slot is written by the cast: no clearing
+            buf.hits.resize(buf.rays.len(), None);
+            let _ = caster.cast_batch(&buf.rays, &mut buf.hits);
+            stats.rays += buf.rays.len();
+            for (k, (n, o)) in chunk.iter().zip(out_chunk.iter_mut()).enumerate() {
+                let mut ll = 0.0;
+                let mut prod: f64 = 1.0;
+                let base = k * nb;
+                for j in 0..nb {
+                    if linear && j % 8 == 7 {
+                        ll += prod.ln();
+                        prod = 1.0;
+                    }
+                    let Some(hit) = &buf.hits[base + j] else {
+                        if linear {
+                            prod *= outlier;
+                        } else {
+                            ll += ln_outlier;
+                        }
+                        continue;
+                    };
+                    stats.hits += 1;
+                    let u = &buf.rays[base + j].dir_in_nav;
+                    let on = &hit.normal_in_nav;
+                    let mut q = on.dot(u);
+                    if q.abs() < MIN_COS {
+                        q = -MIN_COS;
+                    }
+                    let oxu = on.cross(u);
+                    let k = -hit.range / q;
+                    // rows of the beam for the linear pose states and for n
+                    let g = Vector3::new(on.z / q, k * oxu.x, k * oxu.y);
+                    let h_n = Vector3::new(on.x / q, on.y / q, k * oxu.z);
+                    let beam = &self.beams[j];
+                    let s2 = beam.sigma_m * beam.sigma_m
+                        + g.dot(&(self.pose_cov * g))
+                        + h_n.component_mul(&h_n).dot(&self.kernel_var);
+                    let nu = beam.range_m - hit.range;
+                    if linear {
+                        prod *= keep_norm * (-0.5 * nu * nu / s2).exp() / s2.sqrt() + tail;
+                    } else {
+                        ll += -0.5 * nu * nu / s2 - 0.5 * s2.ln() - half_ln_2pi;
+                    }
+                }
+                ll += prod.ln();
+                if let Some(b) = self.baro {
+                    let lin = self.pose_base + self.pose_slope * (n - self.mu_n);
+                    let height = -(self.pos_hat.z - lin.x);
+                    let s2 = b.sigma_m * b.sigma_m + self.pose_cov[(0, 0)];
+                    let nu = b.height_m - height;
+                    ll += -0.5 * nu * nu / s2 - 0.5 * s2.ln() - half_ln_2pi;
+                }
+                *o = ll;
+            }
+        }
+        stats
+    }
+}
+
+/// The likelihood model of one update: the nominal pose, the beams and the
+/// conditional pose part of the prior.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn model<'a>(
+    nominal: &NominalNav,
+    unit_dirs: &'a [Vector3<f64>],
+    beams: &'a [RangeBeam],
+    baro: Option<&'a BaroHeight>,
+    max_range: f64,
+    outlier_probability: f64,
+    part: &super::marginal::Partition,
+    kernel_var: Vector3<f64>,
+) -> LikelihoodModel<'a> {
+    let (pose_base, pose_slope, pose_cov) = part.pose_part();
+    LikelihoodModel {
+        pos_hat: nominal.pos_in_nav,
+        c_hat: nominal.nav_from_body.to_rotation_matrix().into_inner(),
+        unit_dirs,
+        beams,
+        baro,
+        max_range,
+        outlier_probability,
+        mu_n: part.mu_n,
+        pose_base,
+        pose_slope,
+        pose_cov,
+        kernel_var,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::map_aided::ErrorVector12;
+    use crate::map_aided::marginal::Partition;
+    use crate::map_aided::test_support::Planes;
+    use nalgebra::UnitQuaternion;
+
+    /// The candidate pose is the nominal corrected by the joint error `(n, E[l | n])`,
+    /// and the likelihood peaks at the true offset.
+    #[test]
+    fn candidate_poses_and_the_peak() {
+        let map = Planes::corner();
+        let truth = Vector3::new(-4.0, -5.0, -3.0);
+        let nominal = NominalNav {
+            pos_in_nav: truth + Vector3::new(0.7, -0.4, 0.0),
+            vel_in_nav: Vector3::zeros(),
+            nav_from_body: UnitQuaternion::from_euler_angles(0.0, 0.0, 0.3),
+            accel_bias_in_body: Vector3::zeros(),
+        };
+        let mut p = crate::map_aided::Matrix12::identity() * 0.5;
+        p[(0, 2)] = 0.1;
+        p[(2, 0)] = 0.1;
+        let part = Partition::new(&ErrorVector12::zeros(), &p).unwrap();
+        let dirs: Vec<_> = (0..6)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::FRAC_PI_3;
+                Vector3::new(a.cos(), a.sin(), 0.0)
+            })
+            .collect();
+        let beams: Vec<_> = dirs
+            .iter()
+            .map(|d| RangeBeam {
+                dir_in_body: *d,
+                range_m: map
+                    .cast(&truth, &(nominal.nav_from_body * d), 60.0)
+                    .map_or(1.0, |h| h.range),
+                sigma_m: 0.05,
+            })
+            .collect();
+        let m = model(
+            &nominal,
+            &dirs,
+            &beams,
+            None,
+            60.0,
+            0.05,
+            &part,
+            Vector3::zeros(),
+        );
+        let n = Vector3::new(0.3, -0.2, 0.01);
+        let (pos, c, lin) = m.pose(&n);
+        let dx = Partition::join(&n, &part.linear_mean(&n));
+        let t = nominal.corrected(&dx);
+        assert!((t.pos_in_nav - pos).norm() < 1e-12);
+        assert!((t.nav_from_body.to_rotation_matrix().into_inner() - c).amax() < 1e-12);
+        assert_eq!(lin.x, dx[2]);
+        let pts = [
+            Vector3::new(0.7, -0.4, 0.0),
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(0.7, -0.4, 0.05),
+        ];
+        let mut out = [0.0; 3];
+        let mut buf = RayBuffers::default();
+        let st = m.evaluate(&pts, &mut out, &mut buf, &map);
+        assert_eq!(st.rays, 18);
+        assert!(out[0] > out[1] + 10.0 && out[0] > out[2], "{out:?}");
+        // the linear-domain product equals the sum of the logs of the robust terms
+        let (eps, r) = (0.05, 60.0);
+        let mut manual = 0.0;
+        let (pos, c, _) = m.pose(&pts[1]);
+        for (d, b) in dirs.iter().zip(&beams) {
+            let u = c * d;
+            let l = match map.cast(&pos, &u, r) {
+                None => eps / r,
+                Some(h) => {
+                    let q = h.normal_in_nav.dot(&u);
+                    let k = -h.range / q;
+                    let oxu = h.normal_in_nav.cross(&u);
+                    let g = Vector3::new(h.normal_in_nav.z / q, k * oxu.x, k * oxu.y);
+                    let s2 = b.sigma_m.powi(2) + g.dot(&(m.pose_cov * g));
+                    let nu = b.range_m - h.range;
+                    (1.0 - eps) * (-0.5 * nu * nu / s2).exp()
+                        / (2.0 * std::f64::consts::PI * s2).sqrt()
+                        + eps / r
+                }
+            };
+            manual += l.ln();
+        }
+        assert!(
+            (manual - out[1]).abs() < 1e-9 * manual.abs().max(1.0),
+            "{manual} {}",
+            out[1]
+        );
+    }
+}
