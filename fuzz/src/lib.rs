@@ -10,6 +10,12 @@
 //! message), which the regression test compares with the `.expected` file stored
 //! beside each regression input.
 
+use fathom_core::{Material, RayCaster};
+use fathom_map::mesh::{MAX_COORD, is_degenerate};
+use fathom_map::{
+    AxisConvention, BruteForceCaster, BvhCaster, ImportReport, ImportSettings, MapError,
+    MaterialTable, TriMesh, obj, stl,
+};
 use fathom_sim::data::matv5::mat_v5_bytes;
 use fathom_sim::data::plaza::{
     BeaconSite, PlazaMat, RangeOrder, parse_mat, parse_odometry, parse_ranges,
@@ -337,4 +343,94 @@ pub fn plaza_mat(data: &[u8]) -> Vec<String> {
         }
         Err(e) => vec![e.to_string()],
     }
+}
+
+/// The import settings of the mesh targets: NED axes, a material table with two
+/// custom names (those of `crates/fathom-map/tests/data/house.obj`), opaque faces without `usemtl`, inputs up to 4 MiB.
+fn mesh_settings() -> ImportSettings {
+    let mut materials = MaterialTable::default();
+    materials
+        .insert("concrete", Material::Other(1))
+        .insert("roof_tiles", Material::Other(2));
+    ImportSettings {
+        axes: AxisConvention::Ned,
+        materials,
+        max_bytes: 4 << 20,
+        ..ImportSettings::default()
+    }
+}
+
+/// What an accepted mesh promises: finite vertices within `MAX_COORD`, valid indices,
+/// one material per triangle, no degenerate or duplicate triangle, counts that add
+/// up; and on small meshes the BVH caster agrees with the brute-force oracle on a fan
+/// of rays from the mesh's corners and centre.
+fn check_mesh(file: &str, result: Result<(TriMesh, ImportReport), MapError>) -> Vec<String> {
+    let (mesh, report) = match result {
+        Ok(ok) => ok,
+        Err(e) => return vec![e.in_file(file).to_string()],
+    };
+    let r = report.mesh;
+    assert_eq!(r.triangles_kept, mesh.len());
+    assert_eq!(
+        r.triangles_in,
+        r.triangles_kept + r.degenerate_skipped + r.duplicate_skipped
+    );
+    assert_eq!(mesh.materials().len(), mesh.len());
+    for v in mesh.vertices() {
+        assert!(v.iter().all(|c| c.abs() <= MAX_COORD), "vertex {v:?}");
+    }
+    let mut seen = std::collections::HashSet::new();
+    for (i, t) in mesh.triangles().iter().enumerate() {
+        assert!(t.iter().all(|&k| (k as usize) < mesh.vertices().len()));
+        let [a, b, c] = mesh.corners(i);
+        assert!(!is_degenerate(&a, &b, &c), "degenerate triangle {i} kept");
+        let mut key = *t;
+        key.sort_unstable();
+        assert!(seen.insert(key), "duplicate triangle {i} kept");
+    }
+    if let Some((lo, hi)) = mesh.bounds()
+        && mesh.len() <= 2000
+    {
+        let (bvh, oracle) = (BvhCaster::new(&mesh), BruteForceCaster::new(&mesh));
+        let center = (lo + hi) / 2.0;
+        let span = (hi - lo).norm().max(1.0);
+        for o in [lo, hi, center, center + (hi - lo) * 0.3] {
+            for k in 0..26u32 {
+                let d = nalgebra::Vector3::new(
+                    f64::from(k % 3) - 1.0,
+                    f64::from(k / 3 % 3) - 1.0,
+                    f64::from(k / 9 % 3) - 1.0,
+                );
+                let (h, g) = (
+                    bvh.cast(&o, &d, 2.0 * span),
+                    oracle.cast(&o, &d, 2.0 * span),
+                );
+                assert_eq!(
+                    h.map(|x| (x.triangle, x.range.to_bits())),
+                    g.map(|x| (x.triangle, x.range.to_bits())),
+                    "BVH and oracle disagree from {o:?} along {d:?}"
+                );
+            }
+        }
+    }
+    vec![format!(
+        "ok: {} triangles kept of {} ({} degenerate, {} duplicate), {} non-manifold edges",
+        mesh.len(),
+        r.triangles_in,
+        r.degenerate_skipped,
+        r.duplicate_skipped,
+        r.non_manifold_edges
+    )]
+}
+
+/// Target `map_obj`: the bytes as a Wavefront OBJ file ([`obj::parse_obj`]); an
+/// accepted mesh is checked as [`check_mesh`] says.
+pub fn map_obj(data: &[u8]) -> Vec<String> {
+    check_mesh("fuzz.obj", obj::parse_obj(data, &mesh_settings()))
+}
+
+/// Target `map_stl`: the bytes as an STL file, binary or ASCII ([`stl::parse_stl`]);
+/// an accepted mesh is checked as [`check_mesh`] says.
+pub fn map_stl(data: &[u8]) -> Vec<String> {
+    check_mesh("fuzz.stl", stl::parse_stl(data, &mesh_settings()))
 }

@@ -17,11 +17,13 @@ mod harness;
 
 type Harness = fn(&[u8]) -> Vec<String>;
 
-const TARGETS: [(&str, Harness); 4] = [
+const TARGETS: [(&str, Harness); 6] = [
     ("scenario", harness::scenario),
     ("scenario_edit", harness::scenario_edit),
     ("plaza_text", harness::plaza_text),
     ("plaza_mat", harness::plaza_mat),
+    ("map_obj", harness::map_obj),
+    ("map_stl", harness::map_stl),
 ];
 
 /// The input files in `dir` (sorted; `.expected` snapshots and dot files left out).
@@ -98,6 +100,23 @@ fn seed_inputs_are_valid() {
         harness::plaza_text(&td)[2],
         "ranges sort: ok, 4 ranges, 1 order breaks"
     );
+    for (target, seed) in [
+        ("map_obj", "seed_house.obj"),
+        ("map_stl", "seed_wedge_binary.stl"),
+        ("map_stl", "seed_wedge_ascii.stl"),
+    ] {
+        let bytes = std::fs::read(Path::new("fuzz/corpus").join(target).join(seed)).unwrap();
+        let run = if target == "map_obj" {
+            harness::map_obj
+        } else {
+            harness::map_stl
+        };
+        assert!(
+            run(&bytes)[0].starts_with("ok"),
+            "{seed}: {:?}",
+            run(&bytes)
+        );
+    }
     for preset in 0..harness::presets().len() as u8 {
         let outcome = harness::scenario_edit(&[preset]);
         assert!(outcome[0].starts_with("ok"), "{outcome:?}");

@@ -1,12 +1,16 @@
-//! `cargo xtask bench [--compare] [FILTER]`: runs the criterion benchmarks of the
-//! workspace (`cargo bench --workspace`), collects criterion's estimates into
-//! `target/bench/bench.json` (`{"name", "ns_per_iter", "iters", ...}` per benchmark)
-//! and prints a table with the performance targets of `docs/performance.md`.
+//! `cargo xtask bench [--compare] [--mesh FILE] [FILTER]`: runs the criterion
+//! benchmarks of the workspace (`cargo bench --workspace`), collects criterion's
+//! estimates into `target/bench/bench.json` (`{"name", "ns_per_iter", "iters", ...}`
+//! per benchmark) and prints a table with the performance targets of
+//! `docs/performance.md`. `--mesh FILE` hands an OBJ mesh (NED metres, as
+//! `shared/bench/raycast_ref.py` writes it) to the ray-casting bench through the
+//! `FATHOM_RAYCAST_MESH` environment variable (`raycast/mesh`). The target directory
+//! is `CARGO_TARGET_DIR` when set (where cargo and criterion write), else `target/`.
 //! `--compare` also times FilterPy's `KalmanFilter` on the identical 6-state /
 //! 3-measurement problem when `python3` and `filterpy` are installed (skipped with a
 //! message otherwise) and prints the ratio.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::SystemTime;
 
@@ -54,13 +58,29 @@ const TARGETS: [Target; 3] = [
 /// Minimum Monte Carlo speed-up from 1 to 2 threads.
 const MIN_SPEEDUP: f64 = 1.7;
 
+/// The target directory: `CARGO_TARGET_DIR` (relative to the workspace root when
+/// relative) or `<root>/target`.
+pub fn target_dir(root: &Path) -> PathBuf {
+    match std::env::var_os("CARGO_TARGET_DIR") {
+        Some(d) if !d.is_empty() => root.join(PathBuf::from(d)),
+        _ => root.join("target"),
+    }
+}
+
 /// Runs the benchmarks and writes the report.
-pub fn run(root: &Path, compare: bool, filter: Option<&str>) -> Result<()> {
+pub fn run(root: &Path, compare: bool, mesh: Option<&Path>, filter: Option<&str>) -> Result<()> {
     let started = SystemTime::now();
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut cmd = Command::new(cargo);
     cmd.current_dir(root)
         .args(["bench", "--workspace", "--bench", "*", "--"]);
+    if let Some(m) = mesh {
+        let m = std::path::absolute(m).with_context(|| format!("mesh path {}", m.display()))?;
+        if !m.is_file() {
+            bail!("--mesh {}: no such file", m.display());
+        }
+        cmd.env("FATHOM_RAYCAST_MESH", m);
+    }
     if let Some(f) = filter {
         cmd.arg(f);
     }
@@ -68,7 +88,7 @@ pub fn run(root: &Path, compare: bool, filter: Option<&str>) -> Result<()> {
     if !status.success() {
         bail!("`cargo bench` failed ({status})");
     }
-    let criterion_dir = root.join("target").join("criterion");
+    let criterion_dir = target_dir(root).join("criterion");
     let mut results = collect(&criterion_dir, started)?;
     results.sort_by(|a, b| a.name.cmp(&b.name));
     if results.is_empty() {
@@ -77,7 +97,7 @@ pub fn run(root: &Path, compare: bool, filter: Option<&str>) -> Result<()> {
             criterion_dir.display()
         );
     }
-    let out_dir = root.join("target").join("bench");
+    let out_dir = target_dir(root).join("bench");
     std::fs::create_dir_all(&out_dir).with_context(|| format!("creating {}", out_dir.display()))?;
     let json_path = out_dir.join("bench.json");
     let entries: Vec<Value> = results
@@ -178,6 +198,19 @@ fn targets(results: &[BenchResult]) -> String {
                 "NOT met"
             }
         ));
+    }
+    for (name, what) in [
+        ("raycast/buildings", "closest-hit ray, buildings"),
+        ("raycast/mesh", "closest-hit ray, --mesh"),
+    ] {
+        if let Some(r) = find(results, name) {
+            s.push_str(&format!(
+                "  {what:<28} {:>10} per ray (fastest sample {}); Embree: run \
+                 shared/bench/raycast_ref.py on the same mesh (docs/performance.md)\n",
+                fmt_ns(r.ns_per_iter),
+                fmt_ns(r.min_ns_per_iter),
+            ));
+        }
     }
     if let (Some(kf), Some(reference)) = (
         find(results, "kf_6x3_predict_update"),

@@ -20,6 +20,7 @@ commands:
            target/paper/REPORT.md, print paper-versus-reproduced tables
   bench    run the criterion benchmarks (cargo bench --workspace), write
            target/bench/bench.json and print a table with the performance targets
+           (`cargo xtask bench raycast --mesh city.obj`: the ray-casting benches)
   help     show this message
 
 options of `paper`:
@@ -30,6 +31,7 @@ options of `paper`:
 options of `bench`:
   --compare       also time FilterPy's KalmanFilter on the same 6/3 problem
                   (needs python3 + filterpy; skipped with a message otherwise)
+  --mesh FILE     an OBJ mesh in NED metres for the `raycast/mesh` bench
   FILTER          only benchmarks whose name contains FILTER (criterion filter)";
 
 /// A parsed command line.
@@ -38,6 +40,7 @@ enum Command {
     Help,
     Bench {
         compare: bool,
+        mesh: Option<PathBuf>,
         filter: Option<String>,
     },
     Paper {
@@ -105,19 +108,29 @@ fn parse_args(args: &[String]) -> Result<Command, String> {
     })
 }
 
-/// `bench [--compare] [FILTER]`.
+/// `bench [--compare] [--mesh FILE] [FILTER]`.
 fn parse_bench(rest: &[String]) -> Result<Command, String> {
-    let (mut compare, mut filter) = (false, None);
-    for arg in rest {
+    let (mut compare, mut mesh, mut filter) = (false, None, None);
+    let mut args = rest.iter();
+    while let Some(arg) = args.next() {
         match arg.as_str() {
             "-h" | "--help" => return Ok(Command::Help),
             "--compare" => compare = true,
+            "--mesh" => match args.next() {
+                Some(f) if !f.is_empty() => mesh = Some(PathBuf::from(f)),
+                _ => return Err("option `--mesh` needs a file".into()),
+            },
+            a if a.starts_with("--mesh=") && a.len() > 7 => mesh = Some(PathBuf::from(&a[7..])),
             a if a.starts_with('-') => return Err(format!("unknown option `{a}`")),
             a if filter.is_none() => filter = Some(a.to_string()),
             a => return Err(format!("unexpected argument `{a}` (one FILTER at most)")),
         }
     }
-    Ok(Command::Bench { compare, filter })
+    Ok(Command::Bench {
+        compare,
+        mesh,
+        filter,
+    })
 }
 
 /// The workspace root: the parent of this crate's manifest directory.
@@ -159,8 +172,14 @@ fn main() -> ExitCode {
             println!("{USAGE}");
             ExitCode::SUCCESS
         }
-        Ok(Command::Bench { compare, filter }) => {
-            match workspace_root().and_then(|root| bench::run(&root, compare, filter.as_deref())) {
+        Ok(Command::Bench {
+            compare,
+            mesh,
+            filter,
+        }) => {
+            match workspace_root()
+                .and_then(|root| bench::run(&root, compare, mesh.as_deref(), filter.as_deref()))
+            {
                 Ok(()) => ExitCode::SUCCESS,
                 Err(e) => {
                     eprintln!("error: {e:#}");
@@ -214,6 +233,7 @@ mod tests {
             parse("bench --compare kf_"),
             Ok(Command::Bench {
                 compare: true,
+                mesh: None,
                 filter: Some("kf_".into())
             })
         );
@@ -221,9 +241,24 @@ mod tests {
             parse("bench"),
             Ok(Command::Bench {
                 compare: false,
+                mesh: None,
                 filter: None
             })
         );
+        for args in [
+            "bench raycast --mesh city.obj",
+            "bench --mesh=city.obj raycast",
+        ] {
+            assert_eq!(
+                parse(args),
+                Ok(Command::Bench {
+                    compare: false,
+                    mesh: Some(PathBuf::from("city.obj")),
+                    filter: Some("raycast".into())
+                })
+            );
+        }
+        assert!(parse("bench --mesh").is_err());
         assert!(parse("bench --fast").is_err());
         assert!(parse("bench a b").is_err());
         assert_eq!(parse("paper --help"), Ok(Command::Help));

@@ -1,5 +1,6 @@
 //! Shared vocabulary of fathom: time stamps, NED/body frame conventions, Gaussians,
-//! stamped measurement records and the errors they raise.
+//! stamped measurement records and the errors they raise, and the ray-casting
+//! interface through which sensors and estimators see a map ([`raycast`]).
 //!
 //! Every other fathom crate speaks in these types. Conventions (project wide):
 //!
@@ -28,10 +29,12 @@ pub mod error;
 pub mod frames;
 pub mod gaussian;
 pub mod measurement;
+pub mod raycast;
 pub mod time;
 pub mod units;
 
 pub use error::CoreError;
 pub use gaussian::Gaussian;
 pub use measurement::{Measurement, SensorId};
+pub use raycast::{Material, Ray, RayCaster, RayHit};
 pub use time::Time;

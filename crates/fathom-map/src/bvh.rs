@@ -1,0 +1,563 @@
+//! The BVH caster: closest-hit ray casting on a bounding-volume hierarchy.
+//!
+//! The hierarchy is built by `parry3d-f64` (its `Bvh`, one triangle per leaf, binned
+//! SAH or PLOC). For casting, that binary tree is read once (through parry's public
+//! `traverse`, whose visiting order the reader mirrors to recover the topology) and
+//! collapsed into a flat 4-wide tree: each node holds the boxes of up to four
+//! children as `f32` (rounded outwards, then widened as `triangle::widen_box` says),
+//! and the triangles are stored in leaf order. Measured on a 120k-triangle city, this
+//! runs several times faster than parry's own closure-based `find_best` traversal on
+//! its 2-wide `f64` nodes (docs/performance.md).
+//!
+//! Traversal: depth first, children pushed far to near, a node skipped when its
+//! conservative entry range exceeds the best hit; the triangle test and the
+//! selection rule are the brute-force oracle's (`triangle.rs`), so both casters
+//! return the same triangle and range (tested with proptest).
+
+use fathom_core::{RayCaster, RayHit};
+use nalgebra::{Point3, Vector3};
+use parry3d_f64::bounding_volume::Aabb;
+use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhNode, TraversalAction};
+
+use crate::TriMesh;
+use crate::triangle::{Best, PreparedMesh, PreparedTriangle, widen_box};
+
+/// How the hierarchy is built.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BvhBuild {
+    /// Binned surface-area heuristic (Wald 2007), parry's default.
+    #[default]
+    Binned,
+    /// Locally-ordered clustering (Meister and Bittner 2018).
+    Ploc,
+}
+
+/// Child slot flag: the low 31 bits are a triangle slot (leaf order), not a node.
+const LEAF: u32 = 1 << 31;
+/// An unused child slot.
+const EMPTY: u32 = u32::MAX;
+
+/// A node of the 4-wide tree: child boxes as `[axis][lane]` and the child slots
+/// (112 bytes, aligned to two whole cache lines).
+#[derive(Debug, Clone, Copy)]
+#[repr(align(64))]
+struct Node4 {
+    lo: [[f32; 4]; 3],
+    hi: [[f32; 4]; 3],
+    child: [u32; 4],
+}
+
+impl Node4 {
+    const EMPTY: Node4 = Node4 {
+        lo: [[0.0; 4]; 3],
+        hi: [[0.0; 4]; 3],
+        child: [EMPTY; 4],
+    };
+}
+
+/// Casts rays on a 4-wide BVH over the triangles of a [`TriMesh`].
+#[derive(Debug, Clone)]
+pub struct BvhCaster {
+    nodes: Vec<Node4>,
+    /// The boxes are stored relative to this point (the mesh's bounds' center).
+    center: Vector3<f64>,
+    /// Triangles in leaf order.
+    leaf_triangles: Vec<PreparedTriangle>,
+    /// Mesh index of each leaf-order triangle.
+    leaf_index: Vec<u32>,
+    /// Normals and materials by mesh index.
+    mesh: PreparedMesh,
+}
+
+/// A node of the binary tree read from parry.
+#[derive(Debug, Clone, Copy)]
+struct BinNode {
+    lo: Vector3<f64>,
+    hi: Vector3<f64>,
+    /// Triangle index for a leaf.
+    leaf: Option<u32>,
+    children: [usize; 2],
+}
+
+impl BinNode {
+    fn area(&self) -> f64 {
+        let e = self.hi - self.lo;
+        e.x * e.y + e.y * e.z + e.z * e.x
+    }
+}
+
+impl BvhCaster {
+    /// Builds the hierarchy over `mesh` with the default (binned SAH) build.
+    pub fn new(mesh: &TriMesh) -> Self {
+        Self::with_build(mesh, BvhBuild::default())
+    }
+
+    /// Builds the hierarchy over `mesh` with the given build.
+    pub fn with_build(mesh: &TriMesh, build: BvhBuild) -> Self {
+        let prepared = PreparedMesh::new(mesh);
+        let bin = binary_tree(mesh, build);
+        let center = mesh
+            .bounds()
+            .map_or(Vector3::zeros(), |(lo, hi)| (lo + hi) / 2.0);
+        let mut caster = Self {
+            nodes: Vec::new(),
+            center,
+            leaf_triangles: Vec::with_capacity(mesh.len()),
+            leaf_index: Vec::with_capacity(mesh.len()),
+            mesh: prepared,
+        };
+        if !bin.is_empty() {
+            caster.collapse(&bin, mesh);
+        }
+        caster
+    }
+
+    /// Number of triangles.
+    pub fn len(&self) -> usize {
+        self.leaf_triangles.len()
+    }
+
+    /// Whether the map has no triangle.
+    pub fn is_empty(&self) -> bool {
+        self.leaf_triangles.is_empty()
+    }
+
+    /// Collapses the binary tree (root at index 0) into 4-wide nodes, depth first.
+    fn collapse(&mut self, bin: &[BinNode], mesh: &TriMesh) {
+        self.nodes.push(Node4::EMPTY);
+        let mut work = vec![(0usize, 0usize)];
+        while let Some((b, n)) = work.pop() {
+            // the children of `b`, opening the largest inner child until there are 4
+            let mut kids: Vec<usize> = match bin[b].leaf {
+                Some(_) => vec![b],
+                None => bin[b].children.to_vec(),
+            };
+            while kids.len() < 4 {
+                let open = kids
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, k)| bin[**k].leaf.is_none())
+                    .max_by(|x, y| bin[*x.1].area().total_cmp(&bin[*y.1].area()));
+                let Some((slot, &k)) = open else { break };
+                kids.splice(slot..=slot, bin[k].children);
+            }
+            let mut node = Node4::EMPTY;
+            let mut inner = Vec::new();
+            for (lane, &k) in kids.iter().enumerate() {
+                let (lo, hi) = widen_box(&bin[k].lo, &bin[k].hi);
+                for axis in 0..3 {
+                    // relative to the center; the f64 rounding of the difference
+                    // (1e-16 relative) is far inside the widening (1e-9)
+                    node.lo[axis][lane] = round_down(lo[axis] - self.center[axis]);
+                    node.hi[axis][lane] = round_up(hi[axis] - self.center[axis]);
+                }
+                node.child[lane] = match bin[k].leaf {
+                    Some(t) => {
+                        let [a, b, c] = mesh.corners(t as usize);
+                        self.leaf_triangles.push(PreparedTriangle::new(&a, &b, &c));
+                        self.leaf_index.push(t);
+                        LEAF | (self.leaf_index.len() as u32 - 1)
+                    }
+                    None => {
+                        self.nodes.push(Node4::EMPTY);
+                        inner.push((k, self.nodes.len() - 1));
+                        (self.nodes.len() - 1) as u32
+                    }
+                };
+            }
+            self.nodes[n] = node;
+            // first inner child on top of the stack: depth-first layout
+            work.extend(inner.into_iter().rev());
+        }
+    }
+}
+
+fn round_down(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) > x { f.next_down() } else { f }
+}
+
+fn round_up(x: f64) -> f32 {
+    let f = x as f32;
+    if f64::from(f) < x { f.next_up() } else { f }
+}
+
+/// parry's binary tree over the triangles' boxes, read back as [`BinNode`]s (root
+/// first); a single triangle is a lone leaf, no triangle an empty vector.
+fn binary_tree(mesh: &TriMesh, build: BvhBuild) -> Vec<BinNode> {
+    let boxes: Vec<(Vector3<f64>, Vector3<f64>)> = (0..mesh.len())
+        .map(|i| {
+            let [a, b, c] = mesh.corners(i);
+            (a.inf(&b).inf(&c), a.sup(&b).sup(&c))
+        })
+        .collect();
+    match boxes.len() {
+        0 => return Vec::new(),
+        1 => {
+            return vec![BinNode {
+                lo: boxes[0].0,
+                hi: boxes[0].1,
+                leaf: Some(0),
+                children: [0; 2],
+            }];
+        }
+        _ => {}
+    }
+    let strategy = match build {
+        BvhBuild::Binned => BvhBuildStrategy::Binned,
+        BvhBuild::Ploc => BvhBuildStrategy::Ploc,
+    };
+    let bvh = Bvh::from_iter(
+        strategy,
+        boxes
+            .iter()
+            .enumerate()
+            .map(|(i, (lo, hi))| (i, Aabb::new(Point3::from(*lo), Point3::from(*hi)))),
+    );
+    // The root holds the two top children; parry's `traverse` then visits the
+    // children of each node as a pair (left, right) and continues with the left's
+    // pair if it is inner, else the right's, else the most recently deferred right.
+    let root = bvh.root_aabb();
+    let mut nodes = vec![BinNode {
+        lo: root.mins.coords,
+        hi: root.maxs.coords,
+        leaf: None,
+        children: [usize::MAX; 2],
+    }];
+    let mut parent = 0usize;
+    let mut deferred: Vec<usize> = Vec::new();
+    let mut left: Option<usize> = None;
+    let mut done = false;
+    bvh.traverse(|node: &BvhNode| {
+        if done {
+            return TraversalAction::EarlyExit;
+        }
+        let id = nodes.len();
+        nodes.push(BinNode {
+            lo: node.mins().coords,
+            hi: node.maxs().coords,
+            leaf: node.leaf_data(),
+            children: [usize::MAX; 2],
+        });
+        match left.take() {
+            None => {
+                nodes[parent].children[0] = id;
+                left = Some(id);
+            }
+            Some(l) => {
+                nodes[parent].children[1] = id;
+                let (go_l, go_r) = (nodes[l].leaf.is_none(), nodes[id].leaf.is_none());
+                parent = match (go_l, go_r) {
+                    (true, true) => {
+                        deferred.push(id);
+                        l
+                    }
+                    (true, false) => l,
+                    (false, true) => id,
+                    (false, false) => match deferred.pop() {
+                        Some(d) => d,
+                        None => {
+                            done = true;
+                            0
+                        }
+                    },
+                };
+            }
+        }
+        TraversalAction::Continue
+    });
+    if tree_is_complete(&nodes, mesh.len()) {
+        nodes
+    } else {
+        // parry visited in another order than mirrored: fall back to a flat root
+        // whose leaves are every triangle (correct, slow; caught by the tests)
+        flat_tree(&boxes)
+    }
+}
+
+/// Every inner node has two children inside its box, and every triangle is exactly
+/// one leaf.
+fn tree_is_complete(nodes: &[BinNode], triangles: usize) -> bool {
+    let mut seen = vec![false; triangles];
+    for n in nodes {
+        match n.leaf {
+            Some(t) => {
+                let Some(s) = seen.get_mut(t as usize) else {
+                    return false;
+                };
+                if *s {
+                    return false;
+                }
+                *s = true;
+            }
+            None => {
+                for &c in &n.children {
+                    let Some(child) = nodes.get(c) else {
+                        return false;
+                    };
+                    let inside = (0..3).all(|k| child.lo[k] >= n.lo[k] && child.hi[k] <= n.hi[k]);
+                    if !inside {
+                        return false;
+                    }
+                }
+            }
+        }
+    }
+    seen.iter().all(|&s| s)
+}
+
+/// A balanced tree over the triangles in index order (the fallback of `binary_tree`).
+fn flat_tree(boxes: &[(Vector3<f64>, Vector3<f64>)]) -> Vec<BinNode> {
+    fn build(
+        nodes: &mut Vec<BinNode>,
+        boxes: &[(Vector3<f64>, Vector3<f64>)],
+        first: usize,
+        len: usize,
+    ) -> usize {
+        let id = nodes.len();
+        let (mut lo, mut hi) = boxes[first];
+        for b in &boxes[first..first + len] {
+            lo = lo.inf(&b.0);
+            hi = hi.sup(&b.1);
+        }
+        nodes.push(BinNode {
+            lo,
+            hi,
+            leaf: (len == 1).then_some(first as u32),
+            children: [0; 2],
+        });
+        if len > 1 {
+            let l = build(nodes, boxes, first, len / 2);
+            let r = build(nodes, boxes, first + len / 2, len - len / 2);
+            nodes[id].children = [l, r];
+        }
+        id
+    }
+    let mut nodes = Vec::with_capacity(2 * boxes.len());
+    build(&mut nodes, boxes, 0, boxes.len());
+    nodes
+}
+
+/// The traversal stack: 64 entries in place, spilling to the heap beyond (only for
+/// very deep trees). An entry packs a node index and its entry range as `f32` bits.
+struct Stack {
+    items: [u64; 64],
+    len: usize,
+    spill: Vec<u64>,
+}
+
+impl Stack {
+    #[inline(always)]
+    fn new() -> Self {
+        Self {
+            items: [0; 64],
+            len: 0,
+            spill: Vec::new(),
+        }
+    }
+
+    #[inline(always)]
+    fn push(&mut self, node: u32, entry: f32) {
+        let item = (u64::from(entry.to_bits()) << 32) | u64::from(node);
+        if self.len < self.items.len() {
+            self.items[self.len] = item;
+            self.len += 1;
+        } else {
+            self.spill.push(item);
+        }
+    }
+
+    #[inline(always)]
+    fn pop(&mut self) -> Option<(u32, f32)> {
+        let item = if let Some(s) = self.spill.pop() {
+            s
+        } else if self.len > 0 {
+            self.len -= 1;
+            self.items[self.len]
+        } else {
+            return None;
+        };
+        Some((item as u32, f32::from_bits((item >> 32) as u32)))
+    }
+}
+
+/// `a < b ? a : b`: one `minps` (unlike `f32::min`, whose NaN rule costs several
+/// instructions). The box test never produces NaN (see [`RayF32`]).
+#[inline(always)]
+fn min(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// `a > b ? a : b` (see [`min`]).
+#[inline(always)]
+fn max(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
+}
+
+/// Relative widening of the `f32` range intervals: the slab products are rounded
+/// three or four times at `2^-24` (about 2.4e-7 relative); 1e-6 covers it.
+const F32_SLACK: f32 = 1e-6;
+
+/// A ray prepared for the `f32` box tests, relative to the tree's center.
+///
+/// Conservative: the origin's rounding to `f32` (at most `2^-24 |o|`, taken as
+/// `e = 2^-23 max|o_k| + 1e-6` m) is added to every axis interval as `e |1/d_k|`; a
+/// zero direction component gets the reciprocal `+-1e30` instead of infinity, so the
+/// slab products are never `0 * inf` (no NaN), and its slack `e 1e30` leaves that axis
+/// unrestricted for an origin inside the slab; relative rounding is covered by
+/// [`F32_SLACK`]. Overflow gives infinities, which compare correctly.
+#[derive(Debug, Clone, Copy)]
+struct RayF32 {
+    o: [f32; 3],
+    inv: [f32; 3],
+    slack: [f32; 3],
+}
+
+impl RayF32 {
+    #[inline(always)]
+    fn new(o: &[f64; 3], d: &[f64; 3], center: &Vector3<f64>) -> Self {
+        let rel = [o[0] - center.x, o[1] - center.y, o[2] - center.z];
+        let e = 2f64.powi(-23) * rel[0].abs().max(rel[1].abs()).max(rel[2].abs()) + 1e-6;
+        let inv = |x: f64| -> f64 {
+            if x.abs() > 1e-30 {
+                1.0 / x
+            } else {
+                1e30f64.copysign(x)
+            }
+        };
+        let i = [inv(d[0]), inv(d[1]), inv(d[2])];
+        Self {
+            o: rel.map(|x| x as f32),
+            inv: i.map(|x| x as f32),
+            slack: i.map(|x| round_up(e * x.abs() * (1.0 + 1e-6))),
+        }
+    }
+}
+
+impl BvhCaster {
+    /// Entry ranges (conservative lower bounds) of the four child boxes of `node`, and
+    /// the mask of the boxes hit with an entry not beyond `limit`.
+    #[inline(always)]
+    fn entries(node: &Node4, ray: &RayF32, limit: f32) -> ([f32; 4], u32) {
+        let mut near = [f32::NEG_INFINITY; 4];
+        let mut far = [f32::INFINITY; 4];
+        for axis in 0..3 {
+            let (o, inv, s) = (ray.o[axis], ray.inv[axis], ray.slack[axis]);
+            for lane in 0..4 {
+                let a = (node.lo[axis][lane] - o) * inv;
+                let b = (node.hi[axis][lane] - o) * inv;
+                near[lane] = max(near[lane], min(a, b) - s);
+                far[lane] = min(far[lane], max(a, b) + s);
+            }
+        }
+        let mut mask = 0;
+        for lane in 0..4 {
+            let n = near[lane] - F32_SLACK * near[lane].abs();
+            let f = far[lane] + F32_SLACK * far[lane].abs();
+            near[lane] = n;
+            if n <= f && f >= 0.0 && n <= limit {
+                mask |= 1 << lane;
+            }
+        }
+        (near, mask)
+    }
+}
+
+impl RayCaster for BvhCaster {
+    fn cast(
+        &self,
+        origin_in_nav: &Vector3<f64>,
+        dir_in_nav: &Vector3<f64>,
+        max_range: f64,
+    ) -> Option<RayHit> {
+        let (o, d, max_range) = PreparedMesh::ray(origin_in_nav, dir_in_nav, max_range)?;
+        if self.nodes.is_empty() {
+            return None;
+        }
+        let ray = RayF32::new(&o, &d, &self.center);
+        let mut best = Best::new(max_range);
+        // `best.t` as an f32 not below it (the node pruning bound)
+        let mut limit = round_up(best.t);
+        let mut stack = Stack::new();
+        stack.push(0, f32::NEG_INFINITY);
+        while let Some((n, entry)) = stack.pop() {
+            if entry > limit {
+                continue;
+            }
+            let node = &self.nodes[n as usize];
+            let (ent, mut mask) = Self::entries(node, &ray, limit);
+            // inner children, kept sorted far to near so the nearest is popped first
+            let mut inner: [(f32, u32); 4] = [(0.0, 0); 4];
+            let mut count = 0;
+            while mask != 0 {
+                let lane = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let c = node.child[lane];
+                if c == EMPTY {
+                    continue;
+                }
+                if c & LEAF != 0 {
+                    let slot = (c & !LEAF) as usize;
+                    best.offer(&self.leaf_triangles[slot], self.leaf_index[slot], &o, &d);
+                    limit = round_up(best.t);
+                } else {
+                    // insertion into the far-to-near order
+                    let mut j = count;
+                    while j > 0 && inner[j - 1].0 < ent[lane] {
+                        inner[j] = inner[j - 1];
+                        j -= 1;
+                    }
+                    inner[j] = (ent[lane], c);
+                    count += 1;
+                }
+            }
+            for &(e, c) in &inner[..count] {
+                if e <= limit {
+                    stack.push(c, e);
+                }
+            }
+        }
+        self.mesh.hit_record(&best, &d)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::presets::BuildingsParams;
+
+    #[test]
+    fn the_read_back_tree_is_complete() {
+        let mesh = BuildingsParams::default().check().unwrap().mesh().unwrap();
+        for build in [BvhBuild::Binned, BvhBuild::Ploc] {
+            let bin = binary_tree(&mesh, build);
+            assert!(tree_is_complete(&bin, mesh.len()));
+            // not the fallback: parry's tree has more than log2(n) + 1 levels only
+            // rarely, and its root's children are parry's, not the index halves
+            let caster = BvhCaster::with_build(&mesh, build);
+            assert_eq!(caster.len(), mesh.len());
+            let mut leaves = caster.leaf_index.clone();
+            leaves.sort_unstable();
+            assert_eq!(leaves, (0..mesh.len() as u32).collect::<Vec<_>>());
+        }
+        assert!(tree_is_complete(
+            &flat_tree(&[(Vector3::zeros(), Vector3::zeros()); 5]),
+            5
+        ));
+    }
+
+    #[test]
+    fn the_stack_spills_and_rounding_is_outward() {
+        let mut s = Stack::new();
+        for i in 0..100u32 {
+            s.push(i, i as f32);
+        }
+        for i in (0..100u32).rev() {
+            assert_eq!(s.pop(), Some((i, i as f32)));
+        }
+        assert_eq!(s.pop(), None);
+        for x in [0.1, -0.1, 1e9 + 0.3, -1e9 - 0.3, 0.0] {
+            assert!(f64::from(round_down(x)) <= x && f64::from(round_up(x)) >= x);
+        }
+    }
+}
