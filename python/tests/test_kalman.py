@@ -153,13 +153,13 @@ def test_bad_covariances_raise_the_core_message_and_leave_the_filter_unchanged()
     with pytest.raises(ValueError, match=r"^measurement z: value at index 1 is not finite \(NaN\) at t = 1 s$"):
         kf.update(np.array([0.0, np.nan, 0.0]))
     with pytest.raises(ValueError, match=r"process noise Q \(diagonal entry 2 = -1\) is not positive definite"):
-        kf.predict(Q=-np.eye(6))
+        kf.predict(Q=np.diag([1.0, 1.0, -1.0, 1.0, 1.0, 1.0]))
     # in-place NaN in P is refused at the next step
     P_now = kf.P
     P_now[0, 0] = np.nan
     with pytest.raises(ValueError, match="covariance P: value at index 0 is not finite"):
         kf.predict()
-    kf.P = P_now.__class__(np.eye(6))
+    kf.P = np.eye(6)  # replacing P drops the pending in-place edit
     kf.predict()
     assert kf.t == 2.0
     assert np.all(np.isfinite(kf.P)) and x.shape == (6, 1) and P.shape == (6, 6)

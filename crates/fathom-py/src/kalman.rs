@@ -39,7 +39,7 @@ fn array2<'py>(
     rows: usize,
     cols: usize,
 ) -> PyResult<Bound<'py, PyArray2<f64>>> {
-    Ok(PyArray1::from_slice(py, v).reshape([rows, cols])?)
+    PyArray1::from_slice(py, v).reshape([rows, cols])
 }
 
 /// A column vector `(n, 1)` or a 1-D `(n,)` array.
@@ -49,7 +49,7 @@ fn vector<'py>(py: Python<'py>, v: &[f64], ndim: usize) -> PyResult<Bound<'py, P
     } else {
         vec![v.len(), 1]
     };
-    Ok(PyArray1::from_slice(py, v).reshape(shape)?)
+    PyArray1::from_slice(py, v).reshape(shape)
 }
 
 /// `obj` as a float64 `(rows, cols)` array: the object itself when it already is one
@@ -61,10 +61,10 @@ fn model_matrix(
     rows: usize,
     cols: usize,
 ) -> PyResult<Py<PyArray2<f64>>> {
-    if let Ok(a) = obj.cast::<PyArray2<f64>>() {
-        if a.shape() == [rows, cols] {
-            return Ok(a.clone().unbind());
-        }
+    if let Ok(a) = obj.cast::<PyArray2<f64>>()
+        && a.shape() == [rows, cols]
+    {
+        return Ok(a.clone().unbind());
     }
     let values = matrix(name, obj, rows, cols)?;
     Ok(array2(py, &values, rows, cols)?.unbind())
@@ -273,6 +273,8 @@ impl KalmanFilter {
     #[setter]
     fn set_x(&mut self, py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<()> {
         let x = vector_arg("x", value, self.dim_x)?;
+        // a pending in-place edit of the old `x` is replaced, not loaded
+        self.x_out = None;
         self.sync(py)?;
         let p = self.core.covariance();
         self.core.set_estimate(&x, &p).map_err(core_err)?;
@@ -297,6 +299,8 @@ impl KalmanFilter {
     #[setter]
     fn set_P(&mut self, py: Python<'_>, value: &Bound<'_, PyAny>) -> PyResult<()> {
         let p = matrix("P", value, self.dim_x, self.dim_x)?;
+        // a pending in-place edit of the old `P` is replaced, not loaded
+        self.p_out = None;
         self.sync(py)?;
         let x = self.core.state();
         self.core.set_estimate(&x, &p).map_err(core_err)?;

@@ -16,7 +16,6 @@
 
 mod arrays;
 mod csv;
-mod json;
 pub mod kalman;
 pub mod kalman_core;
 pub mod run;

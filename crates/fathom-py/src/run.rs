@@ -22,7 +22,7 @@ use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueEr
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
-use crate::{csv, json};
+use crate::csv;
 
 /// The label of a scenario given as text.
 pub const TEXT_LABEL: &str = "<scenario text>";
@@ -198,9 +198,10 @@ fn build_result(
     resolved_toml: String,
     out_dir: Option<String>,
 ) -> PyResult<RunResult> {
-    let value = serde_json::to_value(summary)
-        .map_err(|e| PyRuntimeError::new_err(format!("summary: {e}")))?;
-    let summary_py = json::to_py(py, &value)?;
+    // summary.json's own text through Python's json module: the dict is what
+    // `json.load` gives for the file (key order and every float bit included)
+    let text = summary.to_json_pretty().map_err(|e| to_py_err(&e))?;
+    let summary_py = py.import("json")?.call_method1("loads", (text,))?;
     let dict = summary_py.cast::<PyDict>()?;
     let get = |k: &str| -> PyResult<Py<PyAny>> {
         dict.get_item(k)?

@@ -131,7 +131,7 @@ fn rays(
             )));
         }
         // NaN fails too
-        if !(*r > 0.0) {
+        if r.is_nan() || *r <= 0.0 {
             return Err(PyValueError::new_err(format!(
                 "max_range: entry {i} must be > 0 (inf: no limit), got {r}"
             )));
