@@ -79,9 +79,19 @@ pub(crate) fn points(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 3
     }
     let view = a.as_array();
     let mut out = Vec::with_capacity(shape[0]);
-    for (i, row) in view.outer_iter().enumerate() {
+    // contiguous rows (the usual case) are read as one slice
+    let flat: Vec<f64>;
+    let values: &[f64] = match view.as_slice() {
+        Some(s) => s,
+        None => {
+            flat = view.iter().copied().collect();
+            &flat
+        }
+    };
+    for (i, row) in values.chunks_exact(3).enumerate() {
         let p = [row[0], row[1], row[2]];
-        if let Some(v) = p.iter().find(|v| !v.is_finite()) {
+        if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
+            let v = p.iter().find(|v| !v.is_finite()).copied().unwrap_or(f64::NAN);
             return Err(PyValueError::new_err(format!(
                 "{name}: row {i} is not finite ({v})"
             )));
