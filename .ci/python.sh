@@ -33,6 +33,8 @@ if ! "$PYTHON" -m venv "${VENV}" 2>/dev/null; then
   "$PYTHON" -m virtualenv --quiet "${VENV}"
 fi
 PY="${VENV}/bin/python"
+# the maturin build backend runs the `maturin` executable of the environment
+export PATH="${VENV}/bin:${PATH}"
 "$PY" -m pip install --quiet --upgrade pip
 "$PY" -m pip install --quiet maturin pytest numpy filterpy
 
