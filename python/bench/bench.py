@@ -14,6 +14,7 @@ import argparse
 import json
 import os
 import platform
+import resource
 import statistics
 import time
 
@@ -22,13 +23,24 @@ import numpy as np
 import fathom
 
 
-def best_of(fn, repeats):
-    """Per-call seconds of fn (which returns its own call count): median and best."""
-    times = []
+def cpu_seconds():
+    """CPU time of this process (all threads), s."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def best_of(fn, repeats, cpu=None):
+    """Per-call wall seconds of fn (which returns its own call count): median and best.
+    With a dict `cpu`, also the median per-call CPU seconds (all threads) in cpu["s"]:
+    on a loaded machine, CPU < wall shows the process did not get its cores."""
+    times, cpus = [], []
     for _ in range(repeats):
-        t0 = time.perf_counter()
+        c0, t0 = cpu_seconds(), time.perf_counter()
         calls = fn()
         times.append((time.perf_counter() - t0) / calls)
+        cpus.append((cpu_seconds() - c0) / calls)
+    if cpu is not None:
+        cpu["s"] = statistics.median(cpus)
     return statistics.median(times), min(times)
 
 
@@ -130,9 +142,10 @@ def raycast(rays, repeats):
             scene.cast_rays(o3d_rays, nthreads=1 if n == 1 else 0)
             return rays
         for name, fn in (("fathom", f_fathom), ("open3d", f_o3d)):
-            med, best = best_of(fn, repeats)
+            cpu = {}
+            med, best = best_of(fn, repeats, cpu)
             out[f"{name}_{label}"] = {"median_s": med * rays, "best_s": best * rays,
-                                      "mrays_per_s": 1e-6 / med}
+                                      "cpu_s": cpu["s"] * rays, "mrays_per_s": 1e-6 / med}
     ours = world.cast(origins, dirs)
     theirs = scene.cast_rays(o3d_rays)
     t = theirs["t_hit"].numpy().astype(np.float64)
@@ -155,7 +168,7 @@ def main():
     import open3d
 
     res = {
-        "machine": {"cpus": os.cpu_count(), "python": platform.python_version(),
+        "machine": {"cpus": os.cpu_count(), "load_average_1min_at_start": os.getloadavg()[0], "python": platform.python_version(),
                     "numpy": np.__version__, "fathom": fathom.__version__,
                     "filterpy": filterpy.__version__, "open3d": open3d.__version__},
         "kalman_6_3": kalman(args.kf_steps, args.repeats),
