@@ -91,7 +91,11 @@ pub(crate) fn points(name: &str, obj: &Bound<'_, PyAny>) -> PyResult<Vec<[f64; 3
     for (i, row) in values.chunks_exact(3).enumerate() {
         let p = [row[0], row[1], row[2]];
         if !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()) {
-            let v = p.iter().find(|v| !v.is_finite()).copied().unwrap_or(f64::NAN);
+            let v = p
+                .iter()
+                .find(|v| !v.is_finite())
+                .copied()
+                .unwrap_or(f64::NAN);
             return Err(PyValueError::new_err(format!(
                 "{name}: row {i} is not finite ({v})"
             )));
