@@ -713,7 +713,7 @@ impl<const N: usize> KalmanFilter<N> {
 }
 
 #[inline]
-fn check_time(what: &str, new_time: Time, current: Time) -> Result<(), EstimatorError> {
+pub(crate) fn check_time(what: &str, new_time: Time, current: Time) -> Result<(), EstimatorError> {
     if new_time.is_finite() && new_time >= current {
         return Ok(());
     }

@@ -90,6 +90,7 @@
 
 pub mod architectures;
 pub mod beacon_ekf;
+pub mod dynamic;
 pub mod ekf;
 pub mod error;
 pub mod error_state;
@@ -112,6 +113,7 @@ pub mod wheel_odometry;
 #[cfg(test)]
 mod consistency_tests;
 
+pub use dynamic::DynKalmanFilter;
 pub use error::EstimatorError;
 pub use fusion::fuse_information;
 pub use gating::{Gate, GateThreshold};

@@ -1,0 +1,366 @@
+//! `fathom.run`, `fathom.check`, `fathom.preset`, `fathom.experiments`: scenarios
+//! through the experiment driver of `fathom-sim`, the same code path as `fathom run`
+//! and `fathom check`.
+//!
+//! A scenario argument is a path (`str` or `os.PathLike`) or TOML text: a `str` that
+//! contains a newline or `=` is TOML text (labelled `<scenario text>` in messages),
+//! any other `str` a path. Invalid scenarios raise `ValueError` with the one line
+//! `fathom check` prints for the same file; an unreadable file raises `OSError`
+//! (`FileNotFoundError` when it does not exist); a failure while running raises
+//! `RuntimeError`.
+
+use std::path::{Path, PathBuf};
+
+use fathom_sim::experiment::{Environment, Executed, Job};
+use fathom_sim::experiments::registry;
+use fathom_sim::output::Summary;
+use fathom_sim::user_run::{
+    RunOptions, check_command, check_scenario_text, one_line, peek_experiment, run_scenario_text,
+};
+use fathom_sim::{DynExperiment, SimError, error_chain};
+use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyString};
+
+use crate::csv;
+
+/// The label of a scenario given as text.
+pub const TEXT_LABEL: &str = "<scenario text>";
+
+/// A scenario argument resolved to its text and the label of its messages.
+struct Scenario {
+    text: String,
+    label: String,
+    /// The file, when given as a path.
+    path: Option<PathBuf>,
+}
+
+/// The one-line message of a library error (as the CLI prints it, without `error: `).
+fn message(e: &SimError) -> String {
+    one_line(&error_chain(e))
+}
+
+/// `ValueError` for usage and scenario errors, `RuntimeError` for the rest (the CLI's
+/// exit codes 2 and 1).
+fn to_py_err(e: &SimError) -> PyErr {
+    match e {
+        SimError::Invalid { .. }
+        | SimError::InvalidArgument { .. }
+        | SimError::Toml { .. }
+        | SimError::UnknownExperiment { .. } => PyValueError::new_err(message(e)),
+        _ => PyRuntimeError::new_err(message(e)),
+    }
+}
+
+fn read_scenario(obj: &Bound<'_, PyAny>) -> PyResult<Scenario> {
+    let path = if obj.is_instance_of::<PyString>() {
+        let s: String = obj.extract()?;
+        if s.contains('\n') || s.contains('=') {
+            return Ok(Scenario {
+                text: s.to_string(),
+                label: TEXT_LABEL.to_string(),
+                path: None,
+            });
+        }
+        PathBuf::from(s)
+    } else {
+        obj.extract::<PathBuf>().map_err(|_| {
+            pyo3::exceptions::PyTypeError::new_err(
+                "scenario: expected a path (str or os.PathLike) or TOML text (str)",
+            )
+        })?
+    };
+    match std::fs::read_to_string(&path) {
+        Ok(text) => Ok(Scenario {
+            text,
+            label: path.display().to_string(),
+            path: Some(path),
+        }),
+        Err(e) => {
+            let kind = e.kind();
+            let msg = message(&SimError::io("read", &path, e));
+            Err(if kind == std::io::ErrorKind::NotFound {
+                PyFileNotFoundError::new_err(msg)
+            } else {
+                PyOSError::new_err(msg)
+            })
+        }
+    }
+}
+
+/// Checks the scenario: `Ok(resolved TOML)` or the `fathom check` line as `ValueError`.
+fn check_text(scenario: &Scenario) -> PyResult<String> {
+    let reg = registry();
+    if let Some(path) = &scenario.path {
+        // the CLI's own function, so the line is the CLI's to the byte
+        let (code, line) = check_command(path, &reg);
+        if code != 0 {
+            return Err(PyValueError::new_err(line));
+        }
+    }
+    check_scenario_text(&scenario.text, &scenario.label, &reg)
+        .map(|c| c.resolved_toml)
+        .map_err(|e| PyValueError::new_err(message(&e)))
+}
+
+/// Parse and validate a scenario without running it (`fathom check`).
+///
+/// Returns the resolved scenario (every default filled in) as TOML text. Raises
+/// `ValueError` with the one line `fathom check` prints when the scenario is invalid.
+#[pyfunction]
+#[pyo3(signature = (scenario, /))]
+pub fn check(scenario: &Bound<'_, PyAny>) -> PyResult<String> {
+    let scenario = read_scenario(scenario)?;
+    check_text(&scenario)
+}
+
+/// The TOML text of a registered experiment's preset scenario (`scenarios/<name>.toml`,
+/// built into the module).
+#[pyfunction]
+#[pyo3(signature = (name, /))]
+pub fn preset(name: &str) -> PyResult<String> {
+    let reg = registry();
+    reg.iter()
+        .find(|e| e.name() == name)
+        .map(|e| e.preset().to_string())
+        .ok_or_else(|| {
+            let known: Vec<&str> = reg.iter().map(|e| e.name()).collect();
+            PyValueError::new_err(format!(
+                "unknown experiment {name:?}, expected one of {known:?}"
+            ))
+        })
+}
+
+/// The registered experiments: name -> one-line description (`fathom list`).
+#[pyfunction]
+pub fn experiments(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let dict = PyDict::new(py);
+    for e in registry() {
+        dict.set_item(e.name(), e.about())?;
+    }
+    Ok(dict)
+}
+
+/// The outcome of `fathom.run`: the summary (`summary.json` as Python objects) and
+/// the run's CSV series as numpy arrays.
+#[pyclass(module = "fathom", frozen, get_all)]
+pub struct RunResult {
+    /// Experiment name.
+    experiment: String,
+    /// The seed paper's file name.
+    seed_doc: String,
+    /// Monte Carlo runs of the main batch.
+    runs: usize,
+    /// Base seed of the runs.
+    base_seed: u64,
+    /// The whole `summary.json` content (a dict equal to `json.load` of the file).
+    summary: Py<PyAny>,
+    /// `summary["rows"]`: dicts with `method`, `metric`, `paper`, `value`, `ci95`.
+    rows: Py<PyAny>,
+    /// `summary["claims"]`: dicts with `id`, `text`, `holds`, `detail`.
+    claims: Py<PyAny>,
+    /// The extra keys of `summary.json` (everything but the contract keys).
+    extra: Py<PyAny>,
+    /// CSV file name -> column name -> float64 array (text columns: list of str).
+    series: Py<PyAny>,
+    /// SVG file name -> SVG text.
+    figures: Py<PyAny>,
+    /// The resolved scenario (defaults filled in, overrides folded in) as TOML.
+    resolved_toml: String,
+    /// The output folder when `out` was given, else `None`.
+    out_dir: Option<String>,
+}
+
+#[pymethods]
+impl RunResult {
+    fn __repr__(&self) -> String {
+        format!(
+            "RunResult(experiment={:?}, runs={}, base_seed={})",
+            self.experiment, self.runs, self.base_seed
+        )
+    }
+}
+
+/// Contract keys of `summary.json` (the rest are extra keys).
+const CONTRACT_KEYS: [&str; 6] = [
+    "experiment",
+    "seed_doc",
+    "runs",
+    "base_seed",
+    "rows",
+    "claims",
+];
+
+fn build_result(
+    py: Python<'_>,
+    summary: &Summary,
+    files: &[(String, String)],
+    resolved_toml: String,
+    out_dir: Option<String>,
+) -> PyResult<RunResult> {
+    // summary.json's own text through Python's json module: the dict is what
+    // `json.load` gives for the file (key order and every float bit included)
+    let text = summary.to_json_pretty().map_err(|e| to_py_err(&e))?;
+    let summary_py = py.import("json")?.call_method1("loads", (text,))?;
+    let dict = summary_py.cast::<PyDict>()?;
+    let get = |k: &str| -> PyResult<Py<PyAny>> {
+        dict.get_item(k)?
+            .map(Bound::unbind)
+            .ok_or_else(|| PyRuntimeError::new_err(format!("summary: no key `{k}`")))
+    };
+    let extra = PyDict::new(py);
+    for (k, v) in dict.iter() {
+        let key: String = k.extract()?;
+        if !CONTRACT_KEYS.contains(&key.as_str()) {
+            extra.set_item(k, v)?;
+        }
+    }
+    let series = PyDict::new(py);
+    let figures = PyDict::new(py);
+    for (name, content) in files {
+        if name.ends_with(".csv") {
+            series.set_item(name, csv::columns(py, name, content)?)?;
+        } else if name.ends_with(".svg") {
+            figures.set_item(name, content)?;
+        }
+    }
+    Ok(RunResult {
+        experiment: summary.experiment.clone(),
+        seed_doc: summary.seed_doc.clone(),
+        runs: summary.runs,
+        base_seed: summary.base_seed,
+        rows: get("rows")?,
+        claims: get("claims")?,
+        extra: extra.into_any().unbind(),
+        summary: summary_py.unbind(),
+        series: series.into_any().unbind(),
+        figures: figures.into_any().unbind(),
+        resolved_toml,
+        out_dir,
+    })
+}
+
+/// The checks `fathom run` makes on its options before anything runs.
+fn check_options(runs: Option<usize>, seed: Option<u64>, threads: Option<usize>) -> PyResult<()> {
+    let bad = |what: &str, reason: String| {
+        Err(PyValueError::new_err(message(&SimError::invalid_argument(
+            what, reason,
+        ))))
+    };
+    if runs == Some(0) {
+        return bad("--runs", "must be at least 1".into());
+    }
+    if threads == Some(0) {
+        return bad("--threads", "must be at least 1".into());
+    }
+    if seed.is_some_and(|s| i64::try_from(s).is_err()) {
+        return bad(
+            "--seed",
+            format!(
+                "must be at most {} (the largest TOML integer, so that the resolved scenario \
+                 can record it)",
+                i64::MAX
+            ),
+        );
+    }
+    Ok(())
+}
+
+/// Run a scenario (a path or TOML text) like `fathom run` and return its results.
+///
+/// `runs` and `seed` override the scenario's `runs` and `base_seed`; `threads` is the
+/// number of worker threads (default: all cores; the numbers do not depend on it).
+/// Without `out`, nothing is written; with `out`, every output file of `fathom run`
+/// (summary.json, report.md, CSV, SVG, the scenario, its resolved form and
+/// run_info.json) is written there by the same writer. The GIL is released while the
+/// scenario runs. Relative data folders of a scenario are looked up from the current
+/// directory, as `fathom run` does.
+#[pyfunction]
+#[pyo3(signature = (scenario, runs=None, seed=None, threads=None, out=None))]
+pub fn run(
+    py: Python<'_>,
+    scenario: &Bound<'_, PyAny>,
+    runs: Option<usize>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    out: Option<PathBuf>,
+) -> PyResult<RunResult> {
+    let scenario = read_scenario(scenario)?;
+    check_options(runs, seed, threads)?;
+    check_text(&scenario)?;
+    let base_dir = std::env::current_dir()
+        .map_err(|e| PyOSError::new_err(format!("cannot read the current directory: {e}")))?;
+    match out {
+        None => {
+            let executed: Executed = py
+                .detach(|| {
+                    let reg = registry();
+                    let exp: &dyn DynExperiment =
+                        peek_experiment(&scenario.text, &scenario.label, &reg)?;
+                    exp.execute(&Job {
+                        text: &scenario.text,
+                        file: &scenario.label,
+                        runs,
+                        seed,
+                        threads,
+                        progress: None,
+                        env: Environment { base_dir },
+                    })
+                })
+                .map_err(|e| to_py_err(&e))?;
+            let files: Vec<(String, String)> = executed
+                .analysis
+                .files()
+                .iter()
+                .map(|f| (f.name.clone(), f.content.clone()))
+                .collect();
+            build_result(py, &executed.summary, &files, executed.resolved.toml, None)
+        }
+        Some(out_dir) => {
+            let options = RunOptions {
+                scenario: scenario
+                    .path
+                    .clone()
+                    .unwrap_or_else(|| PathBuf::from(TEXT_LABEL)),
+                out_dir: Some(out_dir.clone()),
+                runs,
+                threads,
+                seed,
+                base_dir,
+            };
+            let (result, _) = py
+                .detach(|| {
+                    run_scenario_text(&scenario.text, &scenario.label, &options, &registry(), None)
+                })
+                .map_err(|e| to_py_err(&e))?;
+            let files = read_outputs(&result.out_dir)?;
+            build_result(
+                py,
+                &result.summary,
+                &files,
+                result.resolved_toml,
+                Some(result.out_dir.display().to_string()),
+            )
+        }
+    }
+}
+
+/// The CSV and SVG files `fathom run` wrote into `dir`, sorted by name.
+fn read_outputs(dir: &Path) -> PyResult<Vec<(String, String)>> {
+    let io =
+        |e: std::io::Error| PyOSError::new_err(format!("cannot read `{}`: {e}", dir.display()));
+    let mut files = Vec::new();
+    for entry in std::fs::read_dir(dir).map_err(io)? {
+        let path = entry.map_err(io)?.path();
+        let name = path
+            .file_name()
+            .and_then(|n| n.to_str())
+            .unwrap_or_default()
+            .to_string();
+        if path.is_file() && (name.ends_with(".csv") || name.ends_with(".svg")) {
+            files.push((name, std::fs::read_to_string(&path).map_err(io)?));
+        }
+    }
+    files.sort();
+    Ok(files)
+}
