@@ -14,7 +14,8 @@
 //! selection rule are the brute-force oracle's (`triangle.rs`), so both casters
 //! return the same triangle and range (tested with proptest).
 
-use fathom_core::{RayCaster, RayHit};
+use fathom_core::raycast::BatchLengthMismatch;
+use fathom_core::{Ray, RayCaster, RayHit};
 use nalgebra::{Point3, Vector3};
 use parry3d_f64::bounding_volume::Aabb;
 use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhNode, TraversalAction};
@@ -32,6 +33,9 @@ pub enum BvhBuild {
     Ploc,
 }
 
+/// Children per node.
+const WIDTH: usize = 8;
+
 /// Child slot flag: the low 31 bits are a triangle slot (leaf order), not a node.
 const LEAF: u32 = 1 << 31;
 /// An unused child slot.
@@ -42,16 +46,16 @@ const EMPTY: u32 = u32::MAX;
 #[derive(Debug, Clone, Copy)]
 #[repr(align(64))]
 struct Node4 {
-    lo: [[f32; 4]; 3],
-    hi: [[f32; 4]; 3],
-    child: [u32; 4],
+    lo: [[f32; WIDTH]; 3],
+    hi: [[f32; WIDTH]; 3],
+    child: [u32; WIDTH],
 }
 
 impl Node4 {
     const EMPTY: Node4 = Node4 {
-        lo: [[0.0; 4]; 3],
-        hi: [[0.0; 4]; 3],
-        child: [EMPTY; 4],
+        lo: [[0.0; WIDTH]; 3],
+        hi: [[0.0; WIDTH]; 3],
+        child: [EMPTY; WIDTH],
     };
 }
 
@@ -61,10 +65,8 @@ pub struct BvhCaster {
     nodes: Vec<Node4>,
     /// The boxes are stored relative to this point (the mesh's bounds' center).
     center: Vector3<f64>,
-    /// Triangles in leaf order.
-    leaf_triangles: Vec<PreparedTriangle>,
-    /// Mesh index of each leaf-order triangle.
-    leaf_index: Vec<u32>,
+    /// Triangles in leaf order, with their mesh index (one fetch per leaf).
+    leaf_triangles: Vec<(PreparedTriangle, u32)>,
     /// Normals and materials by mesh index.
     mesh: PreparedMesh,
 }
@@ -103,7 +105,6 @@ impl BvhCaster {
             nodes: Vec::new(),
             center,
             leaf_triangles: Vec::with_capacity(mesh.len()),
-            leaf_index: Vec::with_capacity(mesh.len()),
             mesh: prepared,
         };
         if !bin.is_empty() {
@@ -132,7 +133,7 @@ impl BvhCaster {
                 Some(_) => vec![b],
                 None => bin[b].children.to_vec(),
             };
-            while kids.len() < 4 {
+            while kids.len() < WIDTH {
                 let open = kids
                     .iter()
                     .enumerate()
@@ -154,9 +155,9 @@ impl BvhCaster {
                 node.child[lane] = match bin[k].leaf {
                     Some(t) => {
                         let [a, b, c] = mesh.corners(t as usize);
-                        self.leaf_triangles.push(PreparedTriangle::new(&a, &b, &c));
-                        self.leaf_index.push(t);
-                        LEAF | (self.leaf_index.len() as u32 - 1)
+                        self.leaf_triangles
+                            .push((PreparedTriangle::new(&a, &b, &c), t));
+                        LEAF | (self.leaf_triangles.len() as u32 - 1)
                     }
                     None => {
                         self.nodes.push(Node4::EMPTY);
@@ -357,6 +358,12 @@ impl Stack {
     }
 
     #[inline(always)]
+    fn clear(&mut self) {
+        self.len = 0;
+        self.spill.clear();
+    }
+
+    #[inline(always)]
     fn push(&mut self, node: u32, entry: f32) {
         let item = (u64::from(entry.to_bits()) << 32) | u64::from(node);
         if self.len < self.items.len() {
@@ -438,34 +445,42 @@ impl BvhCaster {
     /// Entry ranges (conservative lower bounds) of the four child boxes of `node`, and
     /// the mask of the boxes hit with an entry not beyond `limit`.
     #[inline(always)]
-    fn entries(node: &Node4, ray: &RayF32, limit: f32) -> ([f32; 4], u32) {
-        let mut near = [f32::NEG_INFINITY; 4];
-        let mut far = [f32::INFINITY; 4];
-        for axis in 0..3 {
-            let (o, inv, s) = (ray.o[axis], ray.inv[axis], ray.slack[axis]);
-            for lane in 0..4 {
-                let a = (node.lo[axis][lane] - o) * inv;
-                let b = (node.hi[axis][lane] - o) * inv;
-                near[lane] = max(near[lane], min(a, b) - s);
-                far[lane] = min(far[lane], max(a, b) + s);
-            }
+    fn entries(node: &Node4, ray: &RayF32, limit: f32) -> ([f32; WIDTH], u32) {
+        let [o0, o1, o2] = ray.o;
+        let [i0, i1, i2] = ray.inv;
+        let [s0, s1, s2] = ray.slack;
+        let mut near = [0.0f32; WIDTH];
+        let mut hit = [false; WIDTH];
+        // one lane per iteration, all three axes inside: a loop the compiler
+        // vectorizes across lanes
+        for lane in 0..WIDTH {
+            let ax = (node.lo[0][lane] - o0) * i0;
+            let bx = (node.hi[0][lane] - o0) * i0;
+            let ay = (node.lo[1][lane] - o1) * i1;
+            let by = (node.hi[1][lane] - o1) * i1;
+            let az = (node.lo[2][lane] - o2) * i2;
+            let bz = (node.hi[2][lane] - o2) * i2;
+            let n = max(max(min(ax, bx) - s0, min(ay, by) - s1), min(az, bz) - s2);
+            let f = min(min(max(ax, bx) + s0, max(ay, by) + s1), max(az, bz) + s2);
+            let n = n - F32_SLACK * n.abs();
+            let f = f + F32_SLACK * f.abs();
+            near[lane] = n;
+            // `&`, not `&&`: no branch per lane
+            hit[lane] = (n <= f) & (f >= 0.0) & (n <= limit);
         }
         let mut mask = 0;
-        for lane in 0..4 {
-            let n = near[lane] - F32_SLACK * near[lane].abs();
-            let f = far[lane] + F32_SLACK * far[lane].abs();
-            near[lane] = n;
-            if n <= f && f >= 0.0 && n <= limit {
-                mask |= 1 << lane;
-            }
+        for (lane, &h) in hit.iter().enumerate() {
+            mask |= u32::from(h) << lane;
         }
         (near, mask)
     }
 }
 
-impl RayCaster for BvhCaster {
-    fn cast(
+impl BvhCaster {
+    /// [`RayCaster::cast`] with a caller's traversal stack (left empty).
+    fn cast_with(
         &self,
+        stack: &mut Stack,
         origin_in_nav: &Vector3<f64>,
         dir_in_nav: &Vector3<f64>,
         max_range: f64,
@@ -478,7 +493,7 @@ impl RayCaster for BvhCaster {
         let mut best = Best::new(max_range);
         // `best.t` as an f32 not below it (the node pruning bound)
         let mut limit = round_up(best.t);
-        let mut stack = Stack::new();
+        stack.clear();
         stack.push(0, f32::NEG_INFINITY);
         while let Some((n, entry)) = stack.pop() {
             if entry > limit {
@@ -486,9 +501,11 @@ impl RayCaster for BvhCaster {
             }
             let node = &self.nodes[n as usize];
             let (ent, mut mask) = Self::entries(node, &ray, limit);
-            // inner children, kept sorted far to near so the nearest is popped first
-            let mut inner: [(f32, u32); 4] = [(0.0, 0); 4];
-            let mut count = 0;
+            // inner children, kept sorted far to near so the nearest is popped first;
+            // leaves collected first so that their loads overlap
+            let mut inner: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
+            let mut leaves: [u32; WIDTH] = [0; WIDTH];
+            let (mut count, mut n_leaves) = (0, 0);
             while mask != 0 {
                 let lane = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
@@ -497,9 +514,8 @@ impl RayCaster for BvhCaster {
                     continue;
                 }
                 if c & LEAF != 0 {
-                    let slot = (c & !LEAF) as usize;
-                    best.offer(&self.leaf_triangles[slot], self.leaf_index[slot], &o, &d);
-                    limit = round_up(best.t);
+                    leaves[n_leaves] = c & !LEAF;
+                    n_leaves += 1;
                 } else {
                     // insertion into the far-to-near order
                     let mut j = count;
@@ -511,13 +527,51 @@ impl RayCaster for BvhCaster {
                     count += 1;
                 }
             }
+            for &slot in &leaves[..n_leaves] {
+                let (tri, index) = &self.leaf_triangles[slot as usize];
+                best.offer(tri, *index, &o, &d);
+            }
+            limit = round_up(best.t);
             for &(e, c) in &inner[..count] {
                 if e <= limit {
                     stack.push(c, e);
+                    // touch the node now: its load overlaps with the work before it
+                    // is popped (a software prefetch without `unsafe`)
+                    std::hint::black_box(self.nodes[c as usize].child[0]);
                 }
             }
         }
         self.mesh.hit_record(&best, &d)
+    }
+}
+
+impl RayCaster for BvhCaster {
+    fn cast(
+        &self,
+        origin_in_nav: &Vector3<f64>,
+        dir_in_nav: &Vector3<f64>,
+        max_range: f64,
+    ) -> Option<RayHit> {
+        self.cast_with(&mut Stack::new(), origin_in_nav, dir_in_nav, max_range)
+    }
+
+    /// One traversal stack for the whole batch.
+    fn cast_batch(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Option<RayHit>],
+    ) -> Result<(), BatchLengthMismatch> {
+        if rays.len() != hits.len() {
+            return Err(BatchLengthMismatch {
+                rays: rays.len(),
+                hits: hits.len(),
+            });
+        }
+        let mut stack = Stack::new();
+        for (r, h) in rays.iter().zip(hits.iter_mut()) {
+            *h = self.cast_with(&mut stack, &r.origin_in_nav, &r.dir_in_nav, r.max_range);
+        }
+        Ok(())
     }
 }
 
@@ -536,7 +590,7 @@ mod tests {
             // rarely, and its root's children are parry's, not the index halves
             let caster = BvhCaster::with_build(&mesh, build);
             assert_eq!(caster.len(), mesh.len());
-            let mut leaves = caster.leaf_index.clone();
+            let mut leaves: Vec<u32> = caster.leaf_triangles.iter().map(|t| t.1).collect();
             leaves.sort_unstable();
             assert_eq!(leaves, (0..mesh.len() as u32).collect::<Vec<_>>());
         }
