@@ -4,7 +4,7 @@
 //! The text is scanned once before `tobj` parses it, to give errors a line number:
 //! a `usemtl` name the material table does not map, a face with no material while
 //! there is no default material, a vertex that is not finite or lies beyond
-//! [`MAX_COORD`](crate::mesh::MAX_COORD) after conversion, and a face index that names
+//! [`crate::mesh::MAX_COORD`] after conversion, and a face index that names
 //! no element defined before it (which `tobj` does not check and can overflow on). When `tobj` itself rejects
 //! the file (a malformed number, a face index out of range, ...), the line is found by
 //! bisection: the shortest prefix of the file that `tobj` rejects ends at the culprit
