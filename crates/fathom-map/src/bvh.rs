@@ -99,7 +99,7 @@ impl BvhCaster {
     /// Builds the hierarchy over `mesh` with the given build.
     pub fn with_build(mesh: &TriMesh, build: BvhBuild) -> Self {
         let prepared = PreparedMesh::new(mesh);
-        let bin = binary_tree(mesh, build);
+        let (bin, _mirrored) = binary_tree(mesh, build);
         let center = mesh
             .bounds()
             .map_or(Vector3::zeros(), |(lo, hi)| (lo + hi) / 2.0);
@@ -187,8 +187,9 @@ fn round_up(x: f64) -> f32 {
 }
 
 /// parry's binary tree over the triangles' boxes, read back as [`BinNode`]s (root
-/// first); a single triangle is a lone leaf, no triangle an empty vector.
-fn binary_tree(mesh: &TriMesh, build: BvhBuild) -> Vec<BinNode> {
+/// first), and whether it was read back (`false`: the fallback tree); a single
+/// triangle is a lone leaf, no triangle an empty vector.
+fn binary_tree(mesh: &TriMesh, build: BvhBuild) -> (Vec<BinNode>, bool) {
     let boxes: Vec<(Vector3<f64>, Vector3<f64>)> = (0..mesh.len())
         .map(|i| {
             let [a, b, c] = mesh.corners(i);
@@ -196,14 +197,15 @@ fn binary_tree(mesh: &TriMesh, build: BvhBuild) -> Vec<BinNode> {
         })
         .collect();
     match boxes.len() {
-        0 => return Vec::new(),
+        0 => return (Vec::new(), true),
         1 => {
-            return vec![BinNode {
+            let lone = BinNode {
                 lo: boxes[0].0,
                 hi: boxes[0].1,
                 leaf: Some(0),
                 children: [0; 2],
-            }];
+            };
+            return (vec![lone], true);
         }
         _ => {}
     }
@@ -271,11 +273,11 @@ fn binary_tree(mesh: &TriMesh, build: BvhBuild) -> Vec<BinNode> {
         TraversalAction::Continue
     });
     if tree_is_complete(&nodes, mesh.len()) {
-        nodes
+        (nodes, true)
     } else {
-        // parry visited in another order than mirrored: fall back to a flat root
-        // whose leaves are every triangle (correct, slow; caught by the tests)
-        flat_tree(&boxes)
+        // parry visited in another order than mirrored: fall back to a balanced tree
+        // in index order (correct, slower; the unit test fails on it)
+        (flat_tree(&boxes), false)
     }
 }
 
@@ -585,13 +587,22 @@ mod tests {
 
     #[test]
     fn the_read_back_tree_is_complete() {
-        let mesh = BuildingsParams::default().check().unwrap().mesh().unwrap();
-        for build in [BvhBuild::Binned, BvhBuild::Ploc] {
-            let bin = binary_tree(&mesh, build);
+        let city = BuildingsParams::default().check().unwrap().mesh().unwrap();
+        let bridge = crate::presets::BridgeParams::default()
+            .check()
+            .unwrap()
+            .mesh()
+            .unwrap();
+        for (mesh, build) in [
+            (&city, BvhBuild::Binned),
+            (&city, BvhBuild::Ploc),
+            (&bridge, BvhBuild::Binned),
+        ] {
+            let (bin, mirrored) = binary_tree(mesh, build);
+            // parry's visiting order is the one mirrored (no fallback), complete
+            assert!(mirrored, "{build:?}");
             assert!(tree_is_complete(&bin, mesh.len()));
-            // not the fallback: parry's tree has more than log2(n) + 1 levels only
-            // rarely, and its root's children are parry's, not the index halves
-            let caster = BvhCaster::with_build(&mesh, build);
+            let caster = BvhCaster::with_build(mesh, build);
             assert_eq!(caster.len(), mesh.len());
             let mut leaves: Vec<u32> = caster.leaf_triangles.iter().map(|t| t.1).collect();
             leaves.sort_unstable();
