@@ -393,6 +393,30 @@ impl Stack {
     }
 }
 
+/// The AVX2 token when this CPU has AVX2, found at first use.
+#[cfg(target_arch = "x86_64")]
+fn avx2() -> Option<pulp::x86::V3> {
+    static AVX2: std::sync::OnceLock<Option<pulp::x86::V3>> = std::sync::OnceLock::new();
+    #[cfg(test)]
+    if tests::FORCE_BASELINE.with(std::cell::Cell::get) {
+        return None;
+    }
+    *AVX2.get_or_init(pulp::x86::V3::try_new)
+}
+
+/// Runs `f` compiled a second time with AVX2 enabled when the CPU has it (through
+/// `pulp`, as the Kalman kernels do): the lane loop of the box test then uses 8-wide
+/// registers. Same IEEE operations in the same order on both paths (no fused
+/// multiply-add, min / max as compare-and-select), so the hits are identical.
+#[inline(always)]
+fn dispatch<R>(f: impl FnOnce() -> R) -> R {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(simd) = avx2() {
+        return simd.vectorize(f);
+    }
+    f()
+}
+
 /// `a < b ? a : b`: one `minps` (unlike `f32::min`, whose NaN rule costs several
 /// instructions). The box test never produces NaN (see [`RayF32`]).
 #[inline(always)]
@@ -483,6 +507,7 @@ impl BvhCaster {
 
 impl BvhCaster {
     /// [`RayCaster::cast`] with a caller's traversal stack (left empty).
+    #[inline(always)]
     fn cast_with(
         &self,
         stack: &mut Stack,
@@ -557,7 +582,10 @@ impl RayCaster for BvhCaster {
         dir_in_nav: &Vector3<f64>,
         max_range: f64,
     ) -> Option<RayHit> {
-        self.cast_with(&mut Stack::new(), origin_in_nav, dir_in_nav, max_range)
+        dispatch(
+            #[inline(always)]
+            || self.cast_with(&mut Stack::new(), origin_in_nav, dir_in_nav, max_range),
+        )
     }
 
     /// One traversal stack for the whole batch.
@@ -572,10 +600,15 @@ impl RayCaster for BvhCaster {
                 hits: hits.len(),
             });
         }
-        let mut stack = Stack::new();
-        for (r, h) in rays.iter().zip(hits.iter_mut()) {
-            *h = self.cast_with(&mut stack, &r.origin_in_nav, &r.dir_in_nav, r.max_range);
-        }
+        dispatch(
+            #[inline(always)]
+            || {
+                let mut stack = Stack::new();
+                for (r, h) in rays.iter().zip(hits.iter_mut()) {
+                    *h = self.cast_with(&mut stack, &r.origin_in_nav, &r.dir_in_nav, r.max_range);
+                }
+            },
+        );
         Ok(())
     }
 }
@@ -584,6 +617,48 @@ impl RayCaster for BvhCaster {
 mod tests {
     use super::*;
     use crate::presets::BuildingsParams;
+
+    thread_local! {
+        /// Makes [`super::dispatch`] run the baseline version on this thread.
+        pub(super) static FORCE_BASELINE: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+    }
+
+    #[test]
+    fn avx2_and_baseline_paths_give_the_same_hits() {
+        let mesh = crate::presets::BridgeParams::default()
+            .check()
+            .unwrap()
+            .mesh()
+            .unwrap();
+        let caster = BvhCaster::new(&mesh);
+        let (lo, hi) = mesh.bounds().unwrap();
+        // a deterministic spread of rays: origins on a grid, directions on a spiral
+        let rays: Vec<Ray> = (0..4000)
+            .map(|k| {
+                let f = |i: usize, n: usize| (i % n) as f64 / (n - 1) as f64;
+                let o = lo
+                    + (hi - lo).component_mul(&Vector3::new(
+                        f(k, 17),
+                        f(k / 17, 13),
+                        f(k / 221, 7),
+                    ));
+                let z = 1.0 - 2.0 * (k as f64 + 0.5) / 4000.0;
+                let a = k as f64 * 2.399_963;
+                let r = (1.0 - z * z).sqrt();
+                Ray::new(o, Vector3::new(r * a.cos(), r * a.sin(), z), f64::INFINITY)
+            })
+            .collect();
+        let mut fast = vec![None; rays.len()];
+        caster.cast_batch(&rays, &mut fast).unwrap();
+        FORCE_BASELINE.with(|c| c.set(true));
+        let mut base = vec![None; rays.len()];
+        caster.cast_batch(&rays, &mut base).unwrap();
+        let single: Vec<_> = rays.iter().map(|r| caster.cast_ray(r)).collect();
+        FORCE_BASELINE.with(|c| c.set(false));
+        assert_eq!(fast, base);
+        assert_eq!(fast, single);
+        assert!(fast.iter().filter(|h| h.is_some()).count() > 1000);
+    }
 
     #[test]
     fn the_read_back_tree_is_complete() {
