@@ -58,14 +58,11 @@ pub fn check_text(text: &str) -> Vec<String> {
     }
 }
 
-/// The valid presets (`scenarios/*.toml`) that [`scenario_edit`] starts from.
-pub const PRESETS: [&str; 5] = [
-    include_str!("../../scenarios/fusion.toml"),
-    include_str!("../../scenarios/noise.toml"),
-    include_str!("../../scenarios/beacons.toml"),
-    include_str!("../../scenarios/vkf.toml"),
-    include_str!("../../scenarios/plaza.toml"),
-];
+/// The valid presets (`scenarios/*.toml`, one per registered experiment) that
+/// [`scenario_edit`] starts from.
+pub fn presets() -> Vec<&'static str> {
+    registry().iter().map(|e| e.preset()).collect()
+}
 
 /// Values that validation must handle (non-finite, signed zero, extremes, wrong types).
 const SPECIAL_VALUES: [&str; 24] = [
@@ -138,8 +135,8 @@ impl Decisions<'_> {
 
 /// `key = value` lines of the presets: (key, value text).
 fn assignments() -> Vec<(&'static str, &'static str)> {
-    PRESETS
-        .iter()
+    presets()
+        .into_iter()
         .flat_map(|p| p.lines())
         .filter_map(|l| {
             let l = l.trim();
@@ -181,7 +178,8 @@ fn value(d: &mut Decisions<'_>, known: &[(&str, &str)]) -> String {
 pub fn edited_preset(data: &[u8]) -> String {
     let mut d = Decisions { bytes: data };
     let known = assignments();
-    let preset = PRESETS[usize::from(d.byte()) % PRESETS.len()];
+    let presets = presets();
+    let preset = presets[usize::from(d.byte()) % presets.len()];
     let mut lines: Vec<String> = preset.lines().map(str::to_string).collect();
     for _ in 0..32 {
         if d.is_empty() {

@@ -56,9 +56,12 @@ fn toml_errors_name_the_line() {
 fn presets_check_ok() {
     let reg = registry();
     for exp in &reg {
-        let (code, line) = check_command(Path::new(exp.default_scenario), &reg);
+        let (code, line) = check_command(Path::new(exp.default_scenario()), &reg);
         assert_eq!(code, 0, "{line}");
-        assert!(line.starts_with("OK ") && line.contains(exp.name), "{line}");
+        assert!(
+            line.starts_with("OK ") && line.contains(exp.name()),
+            "{line}"
+        );
     }
     // Negative control: a missing file is an error too.
     let (code, _) = check_command(Path::new("tests/cli_corpus/no-such-file.toml"), &reg);

@@ -117,7 +117,7 @@ fn seed_inputs_are_valid() {
             run(&bytes)
         );
     }
-    for preset in 0..harness::PRESETS.len() as u8 {
+    for preset in 0..harness::presets().len() as u8 {
         let outcome = harness::scenario_edit(&[preset]);
         assert!(outcome[0].starts_with("ok"), "{outcome:?}");
     }

@@ -7,12 +7,16 @@
 mod support;
 
 mod beacons;
+mod campaign;
 mod cli;
 mod determinism;
 mod fusion;
 mod fuzz_corpus;
 mod hardening;
+mod imu_allan;
 mod noise;
 mod plaza;
+mod quadrotor_ins;
+mod report_text;
 mod user_scenarios;
 mod vkf;

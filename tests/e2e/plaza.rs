@@ -168,6 +168,19 @@ fn experiment_runs_on_a_truncated_copy_and_writes_the_contract_outputs() {
     ] {
         assert!(report.contains(needle), "report lacks {needle:?}");
     }
+    // The ablation sentence follows the numbers of this log.
+    let mean = |m: &str| summary.row(m, "mean").unwrap().value;
+    let scale_helps = mean("SC-offset-only") > mean("SC");
+    assert_eq!(
+        report.contains("Adding the scale state removes it."),
+        scale_helps,
+        "{report}"
+    );
+    assert_eq!(
+        report.contains("On this log the scale state does not improve the mean error."),
+        !scale_helps,
+        "{report}"
+    );
     let csv = std::fs::read_to_string(dir.join("estimates.csv")).unwrap();
     let header = csv.lines().next().unwrap();
     assert!(

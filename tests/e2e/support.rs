@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::sync::OnceLock;
 
-use fathom::sim::experiment::run_paper_to;
+use fathom::sim::driver::run_paper_to;
 use fathom::sim::{PaperOptions, PaperResult, SimError};
 
 /// The repository root (where `scenarios/` lives).

@@ -1,10 +1,13 @@
-//! Project automation. `cargo xtask paper [--only NAME] [--runs N] [--threads T]`
+//! Project automation. `cargo xtask codegen` regenerates `docs/scenarios.md`;
+//! `cargo xtask paper [--only NAME] [--runs N] [--threads T]`
 //! reproduces the papers' experiments into `target/paper/` (see
 //! `shared/spec/README.md`, "Output contract"); `cargo xtask bench [--compare]
 //! [FILTER]` runs the benchmarks into `target/bench/bench.json` (see
 //! `docs/performance.md`).
 
 mod bench;
+#[cfg(test)]
+mod tidy;
 
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -21,6 +24,8 @@ commands:
   bench    run the criterion benchmarks (cargo bench --workspace), write
            target/bench/bench.json and print a table with the performance targets
            (`cargo xtask bench raycast --mesh city.obj`: the ray-casting benches)
+  codegen  regenerate docs/scenarios.md from the scenario types' doc comments
+           (a test fails when the committed file is out of date)
   help     show this message
 
 options of `paper`:
@@ -38,6 +43,7 @@ options of `bench`:
 #[derive(Debug, PartialEq, Eq)]
 enum Command {
     Help,
+    Codegen,
     Bench {
         compare: bool,
         mesh: Option<PathBuf>,
@@ -57,6 +63,13 @@ fn parse_args(args: &[String]) -> Result<Command, String> {
     };
     match cmd.as_str() {
         "help" | "-h" | "--help" => return Ok(Command::Help),
+        "codegen" if rest.is_empty() => return Ok(Command::Codegen),
+        "codegen" => {
+            return Err(format!(
+                "`codegen` takes no arguments, got `{}`",
+                rest.join(" ")
+            ));
+        }
         "paper" => {}
         "bench" => return parse_bench(rest),
         other => return Err(format!("unknown command `{other}`")),
@@ -161,6 +174,15 @@ fn paper(only: Option<String>, runs: Option<usize>, threads: Option<usize>) -> R
     Ok(())
 }
 
+/// `cargo xtask codegen`: writes docs/scenarios.md.
+fn codegen() -> Result<()> {
+    let path = workspace_root()?.join("docs").join("scenarios.md");
+    let text = fathom_sim::scenario_docs::render(&fathom_sim::experiments::registry());
+    std::fs::write(&path, text).with_context(|| format!("cannot write `{}`", path.display()))?;
+    println!("wrote {}", path.display());
+    Ok(())
+}
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().skip(1).collect();
     match parse_args(&args) {
@@ -172,6 +194,13 @@ fn main() -> ExitCode {
             println!("{USAGE}");
             ExitCode::SUCCESS
         }
+        Ok(Command::Codegen) => match codegen() {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e:#}");
+                ExitCode::FAILURE
+            }
+        },
         Ok(Command::Bench {
             compare,
             mesh,

@@ -40,18 +40,17 @@ use std::process::ExitCode;
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
-use fathom_sim::data::plaza::{PlazaError, PlazaLog};
+use fathom_sim::driver::campaign::{merge, run_shard, slurm_script};
+use fathom_sim::experiment::{Environment, Job, Shard};
+use fathom_sim::experiments::plaza::Plaza;
 use fathom_sim::progress::{Progress, ProgressEvent};
-use fathom_sim::replay::plaza::{PlazaSettings, parse_settings, replay};
-use fathom_sim::replay::plaza_output::{write_outputs, write_standalone};
+use fathom_sim::replay::plaza::parse_settings;
 use fathom_sim::user_run::{
-    RunOptions, check_command, check_scenario, one_line, run_scenario_with_progress,
+    RunOptions, check_command, check_scenario, one_line, peek_experiment, run_scenario_text,
+    run_scenario_with_progress,
 };
-use fathom_sim::{SimError, error_chain, experiments::registry};
+use fathom_sim::{Experiment, SimError, error_chain, experiments::registry};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-
-/// The built-in settings (a copy of `scenarios/plaza.toml` at build time).
-const DEFAULT_PLAZA_CONFIG: &str = include_str!("../../../scenarios/plaza.toml");
 
 #[derive(Debug, Parser)]
 #[command(
@@ -75,6 +74,46 @@ enum Command {
     Check(CheckArgs),
     /// List the experiments, estimators, update schemes and sensors.
     List,
+    /// Merge the shard folders of a campaign (`fathom run --shard K/M`) into the
+    /// outputs of one run.
+    Merge(MergeArgs),
+    /// Write the launcher of a sharded campaign.
+    #[command(subcommand)]
+    Campaign(CampaignKind),
+}
+
+#[derive(Debug, Args)]
+struct MergeArgs {
+    /// Shard folders (each with `manifest.json`), in any order.
+    #[arg(required = true)]
+    dirs: Vec<PathBuf>,
+    /// Output folder (replaced only once the merge is complete).
+    #[arg(long, value_name = "DIR")]
+    out: PathBuf,
+    /// Worker threads of the analysis (results do not depend on it).
+    #[arg(long, value_name = "T")]
+    threads: Option<usize>,
+}
+
+#[derive(Debug, Subcommand)]
+enum CampaignKind {
+    /// A Slurm job array of shards and a merge job that depends on it.
+    Slurm(SlurmArgs),
+}
+
+#[derive(Debug, Args)]
+struct SlurmArgs {
+    /// Scenario file.
+    scenario: PathBuf,
+    /// Monte Carlo runs of the campaign.
+    #[arg(long, value_name = "N")]
+    runs: usize,
+    /// Number of shards (array tasks).
+    #[arg(long, value_name = "M")]
+    shards: usize,
+    /// Campaign folder: the script, the shards' folders, logs and the merged outputs.
+    #[arg(long, value_name = "DIR", default_value = "campaign")]
+    dir: PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -93,6 +132,29 @@ struct RunArgs {
     /// Output folder (default `fathom-out/<experiment>`).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// Run only shard K of M of every batch and write its records and manifest into
+    /// `--out` (no analysis; `fathom merge` combines the shards).
+    #[arg(long, value_name = "K/M", value_parser = parse_shard)]
+    shard: Option<Shard>,
+}
+
+/// `K/M` with `0 <= K < M`.
+fn parse_shard(text: &str) -> Result<Shard, String> {
+    let (k, m) = text
+        .split_once('/')
+        .ok_or_else(|| format!("expected K/M (e.g. 0/4), got `{text}`"))?;
+    let index: usize = k
+        .trim()
+        .parse()
+        .map_err(|_| format!("shard index `{k}` is not a number"))?;
+    let count: usize = m
+        .trim()
+        .parse()
+        .map_err(|_| format!("shard count `{m}` is not a number"))?;
+    if count == 0 || index >= count {
+        return Err(format!("needs 0 <= K < M, got {index}/{count}"));
+    }
+    Ok(Shard { index, count })
 }
 
 #[derive(Debug, Args)]
@@ -134,24 +196,42 @@ enum Failure {
     Run(anyhow::Error),
 }
 
-fn load_settings(config: Option<&Path>) -> Result<(PlazaSettings, String), Failure> {
-    match config {
-        None => {
-            let label = "built-in scenarios/plaza.toml";
-            parse_settings(DEFAULT_PLAZA_CONFIG, label)
-                .map(|s| (s, label.to_string()))
-                .map_err(|e| Failure::Usage(anyhow!(e)))
-        }
+/// The settings text and its label: `--config` or the built-in preset. Checked here,
+/// so that a bad file is a usage error naming its key.
+fn load_settings(config: Option<&Path>) -> Result<(String, String), Failure> {
+    let (text, label) = match config {
+        None => (
+            <Plaza as Experiment>::PRESET.to_string(),
+            "built-in scenarios/plaza.toml".to_string(),
+        ),
         Some(path) => {
             let label = path.display().to_string();
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read settings file `{label}`"))
                 .map_err(Failure::Usage)?;
-            parse_settings(&text, &label)
-                .map(|s| (s, label))
-                .map_err(|e| Failure::Usage(anyhow!(e)))
+            (text, label)
         }
-    }
+    };
+    parse_settings(&text, &label).map_err(|e| Failure::Usage(anyhow!(e)))?;
+    Ok((text, label))
+}
+
+/// `text` with its `[data] dir` replaced by `dir` (made absolute).
+fn with_data_dir(text: &str, dir: &Path) -> Result<String, Failure> {
+    let mut table: toml::Table = toml::from_str(text)
+        .context("settings")
+        .map_err(Failure::Usage)?;
+    let dir = std::path::absolute(dir)
+        .with_context(|| format!("cannot resolve `{}`", dir.display()))
+        .map_err(Failure::Usage)?;
+    let data = table
+        .get_mut("data")
+        .and_then(toml::Value::as_table_mut)
+        .ok_or_else(|| Failure::Usage(anyhow!("settings: missing table `[data]`")))?;
+    data.insert("dir".into(), toml::Value::String(dir.display().to_string()));
+    toml::to_string(&table)
+        .context("settings")
+        .map_err(Failure::Run)
 }
 
 fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
@@ -161,37 +241,60 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
              deterministic (no random draws, no base seed)"
         )));
     }
-    let (settings, label) = load_settings(args.config.as_deref())?;
-    let log = PlazaLog::read_dir(&args.dir, settings.range_order).map_err(|e| {
-        let usage = matches!(e, PlazaError::NoFolder { .. });
-        let e = anyhow!(e).context("cannot read the Plaza data");
-        if usage {
-            Failure::Usage(e)
-        } else {
-            Failure::Run(e)
+    let (text, label) = load_settings(args.config.as_deref())?;
+    if !args.dir.is_dir() {
+        return Err(Failure::Usage(anyhow!(
+            "cannot read the Plaza data: `{}` is not a folder",
+            args.dir.display()
+        )));
+    }
+    let text = with_data_dir(&text, &args.dir)?;
+    let options = RunOptions {
+        scenario: PathBuf::from(&label),
+        out_dir: Some(args.out.clone()),
+        runs: None,
+        threads: None,
+        seed: None,
+        base_dir: std::env::current_dir()
+            .context("cannot read the current directory")
+            .map_err(Failure::Run)?,
+    };
+    let (result, _) =
+        run_scenario_text(&text, &label, &options, &registry(), None).map_err(|e| {
+            let usage = matches!(e, SimError::InvalidArgument { .. });
+            let e = anyhow!(one_line(&error_chain(&e))).context("replay failed");
+            if usage {
+                Failure::Usage(e)
+            } else {
+                Failure::Run(e)
+            }
+        })?;
+    let s = &result.summary;
+    let value = |m: &str, k: &str| s.row(m, k).map_or(f64::NAN, |r| r.value);
+    let mut methods: Vec<&str> = Vec::new();
+    for r in &s.rows {
+        if r.metric == "mean" && !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
         }
-    })?;
-    let result =
-        replay(&log, &settings).map_err(|e| Failure::Run(anyhow!(e).context("replay failed")))?;
-    let outputs = write_outputs(&result, &args.out)
-        .and_then(|o| write_standalone(&o, &args.out, &args.dir, &label).map(|()| o))
-        .map_err(|e| Failure::Run(anyhow!(e).context("cannot write the outputs")))?;
-    let mut text = format!(
-        "{}: {} odometry rows, {} ranges, {} ground-truth rows; settings: {label}\n\n",
-        result.data_name, result.rows.0, result.rows.1, result.rows.2
-    );
+    }
+    let mut text = format!("settings: {label}; data: {}\n\n", args.dir.display());
     text.push_str(&format!(
         "{:<22} {:>9} {:>9} {:>9} {:>9} {:>9}\n",
         "method", "mean [m]", "std [m]", "max [m]", "rmse [m]", "rejected"
     ));
-    for m in &result.methods {
+    for m in methods {
         text.push_str(&format!(
             "{:<22} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
-            m.name, m.stats.mean, m.stats.std, m.stats.max, m.stats.rmse, m.rejected
+            m,
+            value(m, "mean"),
+            value(m, "std"),
+            value(m, "max"),
+            value(m, "rmse"),
+            value(m, "rejected")
         ));
     }
     text.push('\n');
-    for c in &outputs.summary.claims {
+    for c in &s.claims {
         text.push_str(&format!(
             "[{}] {}: {}\n",
             if c.holds { "holds" } else { "does not hold" },
@@ -203,7 +306,132 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
     Ok(text)
 }
 
+fn usage_or_run(e: SimError) -> Failure {
+    let usage = matches!(
+        e,
+        SimError::InvalidArgument { .. }
+            | SimError::Invalid { .. }
+            | SimError::Toml { .. }
+            | SimError::Json { .. }
+    );
+    let e = anyhow!(one_line(&error_chain(&e)));
+    if usage {
+        Failure::Usage(e)
+    } else {
+        Failure::Run(e)
+    }
+}
+
+fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Failure> {
+    let registry = registry();
+    let label = args.scenario.display().to_string();
+    let text = std::fs::read_to_string(&args.scenario)
+        .with_context(|| format!("cannot read `{label}`"))
+        .map_err(Failure::Usage)?;
+    let exp = peek_experiment(&text, &label, &registry).map_err(usage_or_run)?;
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("fathom-out").join(format!(
+            "{}-shard-{}-of-{}",
+            exp.name(),
+            shard.index,
+            shard.count
+        ))
+    });
+    let job = Job {
+        text: &text,
+        file: &label,
+        runs: args.runs,
+        seed: args.seed,
+        threads: args.threads,
+        progress: None,
+        env: Environment {
+            base_dir: std::env::current_dir()
+                .context("cannot read the current directory")
+                .map_err(Failure::Run)?,
+        },
+    };
+    let bar = progress_bar();
+    let job = Job {
+        progress: bar.as_ref().map(|b| progress_hook(b, true)),
+        ..job
+    };
+    let outcome = run_shard(exp, &job, shard, &out);
+    if let Some(bar) = &bar {
+        bar.finish_and_clear();
+    }
+    let m = outcome.map_err(usage_or_run)?;
+    let mut text = format!(
+        "{} shard {}/{}: {:.1} s, manifest {}\n",
+        m.experiment,
+        shard.index,
+        shard.count,
+        m.elapsed_s,
+        out.join("manifest.json").display()
+    );
+    for b in &m.batches {
+        text.push_str(&format!(
+            "  {}: runs {}..{} of {}\n",
+            b.label, b.first, b.end, b.runs
+        ));
+    }
+    Ok(text)
+}
+
+fn merge_cmd(args: &MergeArgs) -> Result<String, Failure> {
+    let base_dir = std::env::current_dir()
+        .context("cannot read the current directory")
+        .map_err(Failure::Run)?;
+    let (result, m) =
+        merge(&registry(), &args.dirs, args.threads, &base_dir, &args.out).map_err(usage_or_run)?;
+    Ok(format!(
+        "merged {} shard folders of `{}` ({} runs): {} ({} figures, report.md, summary.json)\n",
+        args.dirs.len(),
+        m.experiment,
+        result.summary.runs,
+        result.out_dir.display(),
+        result.figures.len()
+    ))
+}
+
+fn campaign_cmd(kind: &CampaignKind) -> Result<String, Failure> {
+    let CampaignKind::Slurm(args) = kind;
+    if args.shards == 0 || args.runs == 0 {
+        return Err(Failure::Usage(anyhow!(
+            "--runs and --shards must be at least 1"
+        )));
+    }
+    // The scenario must be valid before anything is submitted.
+    let (code, line) = check_command(&args.scenario, &registry());
+    if code != 0 {
+        return Err(Failure::Usage(anyhow!(line)));
+    }
+    let dir = args.dir.display().to_string();
+    let script = slurm_script(
+        &args.scenario.display().to_string(),
+        args.runs,
+        args.shards,
+        &dir,
+    );
+    std::fs::create_dir_all(&args.dir)
+        .with_context(|| format!("cannot create `{dir}`"))
+        .map_err(Failure::Usage)?;
+    let path = args.dir.join("campaign.sh");
+    std::fs::write(&path, script)
+        .with_context(|| format!("cannot write `{}`", path.display()))
+        .map_err(Failure::Usage)?;
+    Ok(format!(
+        "wrote {}: {} shards of {} runs and a dependent merge; submit with `bash {}`\n",
+        path.display(),
+        args.shards,
+        args.runs,
+        path.display()
+    ))
+}
+
 fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
+    if let Some(shard) = args.shard {
+        return run_shard_cmd(args, shard);
+    }
     let registry = registry();
     // Scenario problems are usage errors (exit 2), reported on one line.
     let (code, line) = check_command(&args.scenario, &registry);
@@ -329,8 +557,11 @@ fn list_cmd() -> String {
     let mut text = String::from("experiments (fathom run <scenario>; presets in scenarios/):\n");
     for e in registry() {
         text.push_str(&format!(
-            "  {:<8} seed {:<40} scenario {}\n",
-            e.name, e.seed_doc, e.default_scenario
+            "  {:<8} {} (seed {}; preset {})\n",
+            e.name(),
+            e.about(),
+            e.seed_doc(),
+            e.default_scenario()
         ));
     }
     text.push_str("estimators:\n");
@@ -407,6 +638,8 @@ fn run(cli: &Cli) -> Result<String, Failure> {
         Command::Run(args) => run_scenario_cmd(args),
         Command::Check(args) => check_cmd(args),
         Command::List => Ok(list_cmd()),
+        Command::Merge(args) => merge_cmd(args),
+        Command::Campaign(kind) => campaign_cmd(kind),
     }
 }
 
@@ -557,7 +790,7 @@ mod tests {
         let bad = dir.join("bad.toml");
         std::fs::write(
             &bad,
-            DEFAULT_PLAZA_CONFIG.replace("sigma_m = 1.0", "sigma_m = -1.0"),
+            <Plaza as Experiment>::PRESET.replace("sigma_m = 1.0", "sigma_m = -1.0"),
         )
         .unwrap();
         match load_settings(Some(&bad)) {

@@ -21,6 +21,8 @@ pub enum SensorId {
     Ins,
     /// DVL dead reckoning output (integrated position).
     DvlDeadReckoning,
+    /// Barometric altimeter (static pressure).
+    Barometer,
 }
 
 impl std::fmt::Display for SensorId {
@@ -32,6 +34,7 @@ impl std::fmt::Display for SensorId {
             Self::Depth => write!(f, "depth"),
             Self::Ins => write!(f, "ins"),
             Self::DvlDeadReckoning => write!(f, "dvl_dr"),
+            Self::Barometer => write!(f, "baro"),
         }
     }
 }

@@ -36,6 +36,12 @@ pub fn deg_per_sqrt_hour_to_rad_per_sqrt_s(v: f64) -> f64 {
     v.to_radians() / 60.0
 }
 
+/// Units per square-root hour to units per square-root second (`/ 60`): velocity
+/// random walk quoted in m/s/sqrt(h) becomes m/s/sqrt(s).
+pub fn per_sqrt_hour_to_per_sqrt_s(v: f64) -> f64 {
+    v / 60.0
+}
+
 /// Milli-g to m/s^2 (accelerometer bias figures).
 pub fn milli_g_to_mps2(v: f64) -> f64 {
     v * 1e-3 * STANDARD_GRAVITY
@@ -66,6 +72,12 @@ mod tests {
             epsilon = 1e-10
         );
         assert_relative_eq!(milli_g_to_mps2(1.0), 0.009_806_65, epsilon = 1e-12);
+        // 0.14 m/s/sqrt(h) = 0.14 m/s / 60 sqrt(s)
+        assert_relative_eq!(
+            per_sqrt_hour_to_per_sqrt_s(0.14),
+            0.14 / 60.0,
+            epsilon = 1e-15
+        );
     }
 
     #[test]

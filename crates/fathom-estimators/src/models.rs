@@ -30,6 +30,32 @@ pub fn cv_white_accel_q_1d(dt: f64, q_psd: f64) -> Result<Matrix2<f64>, Estimato
     Ok(Matrix2::new(dt3 / 3.0, dt2 / 2.0, dt2 / 2.0, dt) * q_psd)
 }
 
+/// Process noise of the discrete white-noise-acceleration model (Bar-Shalom, Li &
+/// Kirubarajan §6.3.2): the acceleration is constant over each step and white between
+/// steps with standard deviation `accel_sigma` (m/s^2), entering through
+/// `Gamma = [dt^2/2, dt]`: `Q = accel_sigma^2 [dt^4/4, dt^3/2; dt^3/2, dt^2]`.
+///
+/// # Errors
+/// [`EstimatorError::Core`] if `dt` or `accel_sigma` is not finite or negative.
+pub fn cv_discrete_white_accel_q_1d(
+    dt: f64,
+    accel_sigma: f64,
+) -> Result<Matrix2<f64>, EstimatorError> {
+    ensure_non_negative("time step dt", dt)?;
+    ensure_non_negative("acceleration noise std", accel_sigma)?;
+    let g = nalgebra::Vector2::new(0.5 * dt * dt, dt);
+    Ok(g * g.transpose() * (accel_sigma * accel_sigma))
+}
+
+/// [`cv_discrete_white_accel_q_1d`] on each axis of the paper-A layout, one
+/// acceleration standard deviation for all three axes.
+///
+/// # Errors
+/// As [`cv_discrete_white_accel_q_1d`].
+pub fn cv_discrete_white_accel_q_3d(dt: f64, accel_sigma: f64) -> Result<Matrix6, EstimatorError> {
+    Ok(block_diag3(&cv_discrete_white_accel_q_1d(dt, accel_sigma)?))
+}
+
 /// Constant-velocity transition for three axes in the paper-A layout
 /// `[x, vx, y, vy, z, vz]` (block diagonal of [`cv_transition_1d`]; the paper's `A`
 /// with `T = dt`).
@@ -85,6 +111,22 @@ fn block_diag3(b: &Matrix2<f64>) -> Matrix6 {
 
 #[cfg(test)]
 mod tests {
+
+    #[test]
+    fn discrete_white_accel_q_is_gamma_gamma_t_sigma2() {
+        let q = cv_discrete_white_accel_q_1d(2.0, 0.5).unwrap();
+        // Gamma = [2, 2], sigma^2 = 0.25.
+        assert_eq!(q, Matrix2::new(1.0, 1.0, 1.0, 1.0));
+        let q3 = cv_discrete_white_accel_q_3d(1.0, 2.0).unwrap();
+        assert_eq!(
+            q3.fixed_view::<2, 2>(4, 4).into_owned(),
+            Matrix2::new(1.0, 2.0, 2.0, 4.0)
+        );
+        assert_eq!(q3[(0, 2)], 0.0);
+        assert!(cv_discrete_white_accel_q_1d(1.0, -1.0).is_err());
+        assert!(cv_discrete_white_accel_q_1d(f64::NAN, 1.0).is_err());
+    }
+
     use super::*;
     use approx::assert_relative_eq;
     use nalgebra::{Vector2, Vector6};

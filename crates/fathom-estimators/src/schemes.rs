@@ -72,7 +72,7 @@ use fathom_core::{CoreError, Time, gaussian::SYMMETRY_TOLERANCE};
 use nalgebra::DMatrix;
 
 /// Which update scheme a [`SchemeFilter`] uses (module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum UpdateScheme {
     /// AS: every measurement at its own time stamp.
     Asynchronous,
@@ -239,8 +239,18 @@ pub enum Event<I, S> {
     Measurement(Observation<S>),
 }
 
+impl<I, S> Event<I, S> {
+    /// The event's time stamp, s.
+    pub fn stamp(&self) -> Time {
+        match self {
+            Event::Input { stamp, .. } => *stamp,
+            Event::Measurement(o) => o.stamp,
+        }
+    }
+}
+
 /// What happened to a measurement.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
 pub enum Disposition {
     /// Passed the gate and was applied.
     Accepted,
@@ -275,7 +285,7 @@ pub struct Decision {
 }
 
 /// Per-channel counts of the dispositions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub struct ChannelCounts {
     /// Applied.
     pub accepted: usize,
@@ -287,6 +297,21 @@ pub struct ChannelCounts {
     pub superseded: usize,
     /// Dropped because the value or the stamp is not finite.
     pub non_finite: usize,
+}
+
+impl ChannelCounts {
+    /// The sum over channels.
+    pub fn total(counts: &[ChannelCounts]) -> ChannelCounts {
+        counts
+            .iter()
+            .fold(ChannelCounts::default(), |a, c| ChannelCounts {
+                accepted: a.accepted + c.accepted,
+                rejected: a.rejected + c.rejected,
+                stale: a.stale + c.stale,
+                superseded: a.superseded + c.superseded,
+                non_finite: a.non_finite + c.non_finite,
+            })
+    }
 }
 
 /// An [`Ekf`] run under an [`UpdateScheme`] (module docs).
@@ -446,6 +471,38 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
                 }
             }
         }
+    }
+
+    /// Drives the filter through a log: for each evaluation instant `t` of
+    /// `evaluation_times` (ascending), processes every event of `events` stamped `<= t`
+    /// (in the iterator's order, which must be by stamp), brings the filter to `t`
+    /// ([`SchemeFilter::advance_to`]) and calls `at_evaluation(k, t, filter)` for the
+    /// `k`-th instant. Events stamped after the last instant stay in `events` for the
+    /// caller; an event with a NaN stamp is processed where it stands in the stream
+    /// (the filter drops and counts it). Filter errors go through `filter_error`.
+    ///
+    /// # Errors
+    /// The first error of the filter (mapped) or of `at_evaluation`.
+    pub fn run_to_evaluations<E, It>(
+        &mut self,
+        events: &mut std::iter::Peekable<It>,
+        evaluation_times: impl IntoIterator<Item = Time>,
+        filter_error: impl Fn(EstimatorError) -> E,
+        mut at_evaluation: impl FnMut(usize, Time, &Self) -> Result<(), E>,
+    ) -> Result<(), E>
+    where
+        It: Iterator<Item = Event<M::InputSample, S>>,
+    {
+        for (k, t) in evaluation_times.into_iter().enumerate() {
+            // `!(stamp > t)`: a NaN stamp goes to the filter, which drops and counts it.
+            #[allow(clippy::neg_cmp_op_on_partial_ord)]
+            while let Some(event) = events.next_if(|e| !(e.stamp() > t)) {
+                self.process(event).map_err(&filter_error)?;
+            }
+            self.advance_to(t).map_err(&filter_error)?;
+            at_evaluation(k, t, self)?;
+        }
+        Ok(())
     }
 
     /// Brings the filter to `time`: closes the open AS group, fires every epoch

@@ -72,7 +72,7 @@ impl TruthSample {
 }
 
 /// `(I + [a x])^{-1} b`, exact.
-fn solve_i_plus_skew(a: &Vector3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
+pub(crate) fn solve_i_plus_skew(a: &Vector3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
     (b - a.cross(b) + a * a.dot(b)) / (1.0 + a.norm_squared())
 }
 

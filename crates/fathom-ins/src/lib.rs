@@ -1,6 +1,7 @@
 //! Strapdown inertial navigation for fathom: WGS-84 Earth model, local-level NED
 //! mechanization, error-free IMU increments from a true trajectory, and the 15-state
-//! INS error dynamics.
+//! INS error dynamics; and the reduced mechanization of seed 004 (local NED,
+//! constant gravity, no Earth rate) with its exact IMU inversion ([`local_level`]).
 //!
 //! ```
 //! use fathom_ins::{earth::Geodetic, imu_from_truth::{imu_from_truth, stationary_truth},
@@ -30,6 +31,7 @@ pub mod earth;
 pub mod error;
 pub mod error_model;
 pub mod imu_from_truth;
+pub mod local_level;
 pub mod rotation;
 pub mod route;
 pub mod state;

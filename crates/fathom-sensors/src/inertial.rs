@@ -19,6 +19,27 @@
 //! `N(0, sigma^2)`; the Gauss-Markov part `m` starts from its stationary
 //! distribution. The crate does not depend on `fathom-ins`: increments are passed as
 //! plain vectors.
+//!
+//! # Flicker bias instability (optional, [`FlickerBias`])
+//!
+//! An Allan-variance analysis reads the bias instability `B` from the flat bottom of
+//! the Allan deviation, `sqrt(2 ln 2 / pi) B` (IEEE Std 952). A single first-order
+//! Gauss-Markov process has no flat bottom (its Allan deviation rises as `sqrt(tau)`,
+//! peaks at `tau = 1.89 T` and falls again), so a record made with it does not give
+//! back `B` by that reading. Flicker (`1/f`) noise does, and a sum of Gauss-Markov
+//! processes with correlation times one decade apart and equal variances
+//!
+//! ```text
+//! sigma_j^2 = B^2 ln(10) / pi,   T_j = tau_min 10^j,  j = 0..components
+//! ```
+//!
+//! has the flicker PSD `B^2 / (2 pi f)` between `1 / (2 pi T_max)` and
+//! `1 / (2 pi tau_min)` (the Lorentzians summed with density `1 / ln 10` per unit
+//! `ln T`), hence an Allan deviation within -2 % / +1 % of `0.664 B` for `tau` from
+//! about `10 tau_min` to `T_max / 100`. Each component is stepped exactly like `m`
+//! above and adds to the bias (`b + m + sum_j f_j`). With `B = 0` (the default of
+//! [`ImuSpecParams::check`]) nothing is drawn, so the random stream of the existing
+//! models is unchanged.
 
 use nalgebra::Vector3;
 use rand::Rng;
@@ -126,7 +147,80 @@ impl ImuSpecParams {
             accel_vrw: check_sigma("imu.accel_vrw_mps_per_sqrt_s", p.accel_vrw_mps_per_sqrt_s)?,
             accel_scale_factor: 1e-6
                 * check_sigma("imu.accel_scale_factor_ppm", p.accel_scale_factor_ppm)?,
+            gyro_flicker: FlickerBias::off(),
+            accel_flicker: FlickerBias::off(),
         })
+    }
+}
+
+/// Bias instability as flicker noise: a sum of first-order Gauss-Markov processes,
+/// one per decade of correlation time (module docs). Same on the three axes.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+pub struct FlickerBias {
+    /// Bias-instability coefficient `B` (IEEE 952): rad/s for gyros, m/s^2 for
+    /// accelerometers; 0 = off.
+    pub coefficient: f64,
+    /// Correlation time of the fastest component, s.
+    pub tau_min: f64,
+    /// Number of components (correlation times `tau_min 10^j`, `j < components`).
+    pub components: usize,
+}
+
+impl FlickerBias {
+    /// No flicker part.
+    pub fn off() -> Self {
+        Self::default()
+    }
+
+    /// Flicker bias with coefficient `coefficient` over correlation times from
+    /// `tau_min` to at least `tau_max` (one component per decade).
+    ///
+    /// # Errors
+    /// [`SensorError::InvalidParameter`] naming `field` for a negative or non-finite
+    /// coefficient, a non-positive `tau_min`, `tau_max < tau_min`, or more than 12
+    /// decades.
+    pub fn new(
+        field: &str,
+        coefficient: f64,
+        tau_min: f64,
+        tau_max: f64,
+    ) -> Result<Self, SensorError> {
+        let coefficient = check_sigma(field, coefficient)?;
+        let tau_min = check_positive(&format!("{field} (flicker tau_min)"), tau_min)?;
+        let tau_max = check_positive(&format!("{field} (flicker tau_max)"), tau_max)?;
+        let decades = (tau_max / tau_min).log10();
+        if !(0.0..=12.0).contains(&decades) {
+            return Err(SensorError::InvalidParameter {
+                field: format!("{field} (flicker tau_max)"),
+                value: tau_max,
+                reason: "must be between tau_min and 1e12 tau_min",
+            });
+        }
+        Ok(Self {
+            coefficient,
+            tau_min,
+            components: decades.ceil() as usize + 1,
+        })
+    }
+
+    /// Whether the flicker part is present (non-zero coefficient and components).
+    pub fn is_on(&self) -> bool {
+        self.coefficient > 0.0 && self.components > 0
+    }
+
+    /// Standard deviation of each component, `B sqrt(ln 10 / pi)`.
+    pub fn component_sigma(&self) -> f64 {
+        self.coefficient * (std::f64::consts::LN_10 / std::f64::consts::PI).sqrt()
+    }
+
+    /// Correlation time of component `j`, `tau_min 10^j`, s.
+    pub fn correlation_time(&self, j: usize) -> f64 {
+        self.tau_min * 10f64.powi(j as i32)
+    }
+
+    /// Number of components actually simulated (0 when off).
+    fn active_components(&self) -> usize {
+        if self.is_on() { self.components } else { 0 }
     }
 }
 
@@ -153,11 +247,19 @@ pub struct ImuErrorSpec {
     pub accel_vrw: f64,
     /// Accelerometer scale-factor sigma (dimensionless).
     pub accel_scale_factor: f64,
+    /// Gyro bias instability as flicker noise (off unless set; module docs).
+    #[serde(default)]
+    pub gyro_flicker: FlickerBias,
+    /// Accelerometer bias instability as flicker noise (off unless set).
+    #[serde(default)]
+    pub accel_flicker: FlickerBias,
 }
 
 impl ImuErrorSpec {
     /// Draws one run's errors: turn-on biases, scale factors (3 + 3 + 3 + 3 standard
-    /// normals) and the stationary initial Gauss-Markov states (3 + 3).
+    /// normals), the stationary initial Gauss-Markov states (3 + 3), then, only when
+    /// present, the stationary initial flicker components (3 per gyro component, then
+    /// 3 per accelerometer component).
     pub fn draw(&self, rng: &mut impl Rng) -> ImuErrors {
         let mut v3 = |sigma: f64| {
             let x = gauss(rng, sigma);
@@ -171,6 +273,12 @@ impl ImuErrorSpec {
         let accel_sf = v3(self.accel_scale_factor);
         let gyro_gm = v3(self.gyro_bias_instability);
         let accel_gm = v3(self.accel_bias_instability);
+        let gyro_flicker = (0..self.gyro_flicker.active_components())
+            .map(|_| v3(self.gyro_flicker.component_sigma()))
+            .collect();
+        let accel_flicker = (0..self.accel_flicker.active_components())
+            .map(|_| v3(self.accel_flicker.component_sigma()))
+            .collect();
         ImuErrors {
             spec: *self,
             gyro_turn_on,
@@ -179,8 +287,11 @@ impl ImuErrorSpec {
             accel_sf,
             gyro_gm,
             accel_gm,
+            gyro_flicker,
+            accel_flicker,
             cached_dt: f64::NAN,
             coeffs: [0.0; 4],
+            flicker_coeffs: Vec::new(),
         }
     }
 }
@@ -195,20 +306,37 @@ pub struct ImuErrors {
     accel_sf: Vector3<f64>,
     gyro_gm: Vector3<f64>,
     accel_gm: Vector3<f64>,
+    /// Flicker components (empty when off).
+    gyro_flicker: Vec<Vector3<f64>>,
+    accel_flicker: Vec<Vector3<f64>>,
     cached_dt: f64,
     /// `[phi_g, sigma_w_g, phi_a, sigma_w_a]` of the Gauss-Markov steps for `cached_dt`.
     coeffs: [f64; 4],
+    /// `[phi, sigma_w]` per flicker component (gyro components, then accelerometer).
+    flicker_coeffs: Vec<[f64; 2]>,
+}
+
+/// `[phi, sigma_w]` of an exact Gauss-Markov step of length `dt`.
+fn gm_step_coeffs(sigma: f64, tau: f64, dt: f64) -> [f64; 2] {
+    [
+        (-dt / tau).exp(),
+        sigma * (-(-2.0 * dt / tau).exp_m1()).sqrt(),
+    ]
 }
 
 impl ImuErrors {
-    /// Current total gyro bias `b_g + m_g`, rad/s.
+    /// Current total gyro bias `b_g + m_g (+ flicker)`, rad/s.
     pub fn gyro_bias(&self) -> Vector3<f64> {
-        self.gyro_turn_on + self.gyro_gm
+        self.gyro_flicker
+            .iter()
+            .fold(self.gyro_turn_on + self.gyro_gm, |acc, f| acc + f)
     }
 
-    /// Current total accelerometer bias `b_a + m_a`, m/s^2.
+    /// Current total accelerometer bias `b_a + m_a (+ flicker)`, m/s^2.
     pub fn accel_bias(&self) -> Vector3<f64> {
-        self.accel_turn_on + self.accel_gm
+        self.accel_flicker
+            .iter()
+            .fold(self.accel_turn_on + self.accel_gm, |acc, f| acc + f)
     }
 
     /// Gyro scale-factor errors per axis.
@@ -227,7 +355,8 @@ impl ImuErrors {
     }
 
     /// Corrupts one error-free increment over `dt` (see the module docs); advances
-    /// the Gauss-Markov states first (6 standard normals), then draws the white noise
+    /// the Gauss-Markov states first (6 standard normals), then the flicker components
+    /// if any (3 per component, gyro then accelerometer), then draws the white noise
     /// (6 standard normals). Returns `(delta_theta_meas, delta_v_meas)`.
     ///
     /// # Errors
@@ -250,6 +379,14 @@ impl ImuErrors {
                 phi_a,
                 s.accel_bias_instability * (-(-2.0 * dt / s.accel_bias_tau).exp_m1()).sqrt(),
             ];
+            let (gf, af) = (s.gyro_flicker, s.accel_flicker);
+            self.flicker_coeffs = (0..self.gyro_flicker.len())
+                .map(|j| gm_step_coeffs(gf.component_sigma(), gf.correlation_time(j), dt))
+                .chain(
+                    (0..self.accel_flicker.len())
+                        .map(|j| gm_step_coeffs(af.component_sigma(), af.correlation_time(j), dt)),
+                )
+                .collect();
             self.cached_dt = dt;
         }
         let [phi_g, w_g, phi_a, w_a] = self.coeffs;
@@ -258,6 +395,17 @@ impl ImuErrors {
         }
         for i in 0..3 {
             self.accel_gm[i] = phi_a * self.accel_gm[i] + gauss(rng, w_a);
+        }
+        let n_gyro = self.gyro_flicker.len();
+        for (j, [phi, w]) in self.flicker_coeffs.iter().copied().enumerate() {
+            let f = if j < n_gyro {
+                &mut self.gyro_flicker[j]
+            } else {
+                &mut self.accel_flicker[j - n_gyro]
+            };
+            for i in 0..3 {
+                f[i] = phi * f[i] + gauss(rng, w);
+            }
         }
         let sq = dt.sqrt();
         let (arw, vrw) = (self.spec.gyro_arw * sq, self.spec.accel_vrw * sq);
@@ -384,5 +532,89 @@ mod tests {
         let b0 = e.gyro_bias();
         e.corrupt(0.01, &dth, &dv, &mut rng).unwrap();
         assert_eq!(e.gyro_bias(), b0);
+    }
+
+    fn flicker_only(b: f64) -> ImuErrorSpec {
+        let mut spec = ImuSpecParams {
+            gyro_bias_deg_per_hr: 0.0,
+            gyro_bias_instability_deg_per_hr: 0.0,
+            gyro_arw_deg_per_sqrt_hr: 0.0,
+            gyro_scale_factor_ppm: 0.0,
+            ..ImuSpecParams::hg1700()
+        }
+        .check()
+        .unwrap();
+        spec.gyro_flicker = FlickerBias::new("gyro", b, 0.1, 1e5).unwrap();
+        spec
+    }
+
+    /// Without flicker the model draws exactly 18 normals per run and 12 per
+    /// increment, as before the flicker part existed; with flicker the first 18 draws
+    /// (turn-on biases, scale factors, Gauss-Markov states) are unchanged.
+    #[test]
+    fn flicker_leaves_the_existing_random_stream_alone() {
+        use rand::RngCore;
+        use rand_distr::StandardNormal;
+        let spec = ImuSpecParams::hg1700().check().unwrap();
+        let mut rng = ChaCha8Rng::seed_from_u64(21);
+        let mut e = spec.draw(&mut rng);
+        e.corrupt(0.01, &Vector3::zeros(), &Vector3::zeros(), &mut rng)
+            .unwrap();
+        let mut reference = ChaCha8Rng::seed_from_u64(21);
+        for _ in 0..30 {
+            let _: f64 = reference.sample(StandardNormal);
+        }
+        assert_eq!(rng.next_u64(), reference.next_u64());
+
+        let mut with = spec;
+        with.gyro_flicker = FlickerBias::new("gyro", 1e-5, 0.1, 1e5).unwrap();
+        let a = spec.draw(&mut ChaCha8Rng::seed_from_u64(5));
+        let b = with.draw(&mut ChaCha8Rng::seed_from_u64(5));
+        assert_eq!(a.accel_bias(), b.accel_bias());
+        assert_eq!(a.gyro_scale_factor(), b.gyro_scale_factor());
+        assert_ne!(a.gyro_bias(), b.gyro_bias());
+    }
+
+    /// The flicker components start stationary: over 3000 runs the initial bias
+    /// variance per axis is `components * sigma_j^2` within a 4.5-sigma chi-square
+    /// band (normal approximation, 9000 axis samples). Negative control: 6 components'
+    /// worth is rejected.
+    #[test]
+    fn flicker_components_start_stationary() {
+        let b = 1e-4;
+        let spec = flicker_only(b);
+        let f = spec.gyro_flicker;
+        assert_eq!(f.components, 7);
+        let expected = f.components as f64 * f.component_sigma().powi(2);
+        let mut rng = ChaCha8Rng::seed_from_u64(8);
+        let n = 3000;
+        let mut sum_sq = 0.0;
+        for _ in 0..n {
+            sum_sq += spec.draw(&mut rng).gyro_bias().norm_squared();
+        }
+        let var = sum_sq / (3.0 * n as f64);
+        let band = 4.5 * (2.0 / (3.0 * n as f64)).sqrt();
+        assert!((var / expected - 1.0).abs() < band, "{var} vs {expected}");
+        let six = 6.0 * f.component_sigma().powi(2);
+        assert!((var / six - 1.0).abs() > band, "negative control");
+    }
+
+    #[test]
+    fn flicker_parameters_are_checked() {
+        assert!(FlickerBias::new("gyro", -1.0, 0.1, 10.0).is_err());
+        let e = FlickerBias::new("imu.gyro_bi", 1.0, 0.0, 10.0).unwrap_err();
+        assert!(e.to_string().contains("imu.gyro_bi"), "{e}");
+        assert!(FlickerBias::new("gyro", 1.0, 10.0, 1.0).is_err());
+        assert!(FlickerBias::new("gyro", 1.0, 1.0, 1e13).is_err());
+        assert_eq!(
+            FlickerBias::new("gyro", 1.0, 1.0, 1.0).unwrap().components,
+            1
+        );
+        assert_eq!(
+            FlickerBias::new("gyro", 1.0, 0.1, 2e4).unwrap().components,
+            7
+        );
+        assert!(!FlickerBias::off().is_on());
+        assert!(!FlickerBias::new("gyro", 0.0, 0.1, 10.0).unwrap().is_on());
     }
 }

@@ -45,11 +45,16 @@
 //! Modules: [`schedule`] (Table 2-3 clocks), [`noise`] (white, held common-mode,
 //! outliers, bias, scale factor, Gauss-Markov, random walk), [`models`] (DVL, AHRS,
 //! range, depth), [`suite`] (the beacons-paper generator and its design
-//! covariance), [`integrated`] (INS and DVL dead reckoning); against a map (through
-//! [`fathom_core::RayCaster`], so without depending on the map crate):
-//! [`map_range`] (range finders and the lidar), [`gnss`] (constellation, line of
-//! sight, pseudoranges, Doppler, single-point positioning, BESTPOS).
+//! covariance), [`integrated`] (INS and DVL dead reckoning), [`inertial`] (IMU error
+//! model, with flicker bias instability), [`allan_imu`] (IMU figures from an Allan
+//! analysis: the ADIS16448 of seed 004), [`barometer`] (eq. 20 and the linear
+//! calibration eq. 11); against a map (through [`fathom_core::RayCaster`], so without
+//! depending on the map crate): [`map_range`] (range finders and the lidar), [`gnss`]
+//! (constellation, line of sight, pseudoranges, Doppler, single-point positioning,
+//! BESTPOS).
 
+pub mod allan_imu;
+pub mod barometer;
 pub mod error;
 pub mod gnss;
 pub mod inertial;

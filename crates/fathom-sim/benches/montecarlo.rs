@@ -7,7 +7,8 @@ use std::path::PathBuf;
 use std::time::Duration;
 
 use criterion::{Criterion, SamplingMode, criterion_group, criterion_main};
-use fathom_sim::experiments::single_run::SingleRun;
+use fathom_sim::driver::SingleRun;
+use fathom_sim::experiments::registry;
 use fathom_sim::montecarlo::{run_monte_carlo, run_rng};
 
 fn root() -> PathBuf {
@@ -20,15 +21,24 @@ fn one_run_each(c: &mut Criterion) {
         .sampling_mode(SamplingMode::Flat)
         .warm_up_time(Duration::from_millis(500))
         .measurement_time(Duration::from_secs(3));
-    for name in ["fusion", "noise", "beacons", "vkf"] {
-        let run = SingleRun::prepare(name, &root()).unwrap();
-        let mut i = 0usize;
-        g.bench_function(name, |b| {
+    // Every registered Monte Carlo experiment (a deterministic replay has no seed).
+    for exp in registry() {
+        let text = std::fs::read_to_string(root().join(exp.default_scenario())).unwrap();
+        let stochastic = exp
+            .resolve(&text, exp.default_scenario(), None, None)
+            .is_ok_and(|r| r.base_seed.is_some());
+        if !stochastic {
+            continue;
+        }
+        let run = SingleRun::prepare(exp, &root()).unwrap();
+        // Run 0 may record figure detail: start at run 1, as the bulk of a batch.
+        let mut i = 1usize;
+        g.bench_function(exp.name(), |b| {
             b.iter(|| {
                 // a different run stream each time, as in a batch
                 let mut rng = run_rng(1, i);
+                run.run(i, black_box(&mut rng)).unwrap();
                 i += 1;
-                run.run(black_box(&mut rng)).unwrap();
             })
         });
     }
@@ -45,7 +55,11 @@ const SCALING_RUNS: usize = 32;
 /// Monte Carlo batch of [`SCALING_RUNS`] `beacons` runs on 1 and on 2 threads: the
 /// speed-up is the ratio of the two times (`cargo xtask bench` prints it).
 fn thread_scaling(c: &mut Criterion) {
-    let run = SingleRun::prepare("beacons", &root()).unwrap();
+    let beacons = registry()
+        .into_iter()
+        .find(|e| e.name() == "beacons")
+        .unwrap();
+    let run = SingleRun::prepare(beacons, &root()).unwrap();
     let mut g = c.benchmark_group("mc_batch32_beacons");
     g.sample_size(10)
         .sampling_mode(SamplingMode::Flat)
@@ -54,8 +68,8 @@ fn thread_scaling(c: &mut Criterion) {
     for threads in [1usize, 2] {
         g.bench_function(format!("threads_{threads}"), |b| {
             b.iter(|| {
-                let out = run_monte_carlo(SCALING_RUNS, 7, Some(threads), |_, rng| {
-                    run.run(rng).is_ok()
+                let out = run_monte_carlo(SCALING_RUNS, 7, Some(threads), |i, rng| {
+                    run.run(i, rng).is_ok()
                 });
                 assert!(out.iter().all(|&ok| ok));
             })

@@ -111,6 +111,10 @@ pub enum SimError {
         source: serde_json::Error,
     },
 
+    /// A statistic could not be computed (empty or non-finite input, ...).
+    #[error(transparent)]
+    Stats(#[from] fathom_stats::StatsError),
+
     /// A `fathom-core` check failed inside an experiment.
     #[error(transparent)]
     Core(#[from] CoreError),

@@ -45,6 +45,7 @@
 //! - [`experiments`]: the registered paper experiments.
 
 pub mod data;
+pub mod driver;
 pub mod error;
 pub mod experiment;
 pub mod experiments;
@@ -54,12 +55,9 @@ pub mod plot;
 pub mod progress;
 pub mod replay;
 pub mod scenario;
-#[cfg(test)]
-mod scenario_docs;
+pub mod scenario_docs;
 pub mod user_run;
 
+pub use driver::{PaperOptions, PaperResult, error_chain, run_paper};
 pub use error::SimError;
-pub use experiment::{
-    Experiment, ExperimentContext, ExperimentOutput, PaperOptions, PaperResult, error_chain,
-    run_paper,
-};
+pub use experiment::{DynExperiment, Experiment};

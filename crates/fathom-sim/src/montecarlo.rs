@@ -128,6 +128,42 @@ where
         .collect()
 }
 
+/// Runs `f(i, rng)` for the run indices `indices` in parallel (run `i` draws from
+/// [`run_rng`]`(base_seed, i)`) and returns the results in index order, reporting every
+/// finished run to `progress` (the caller reports the batch's start and end). The
+/// driver calls it chunk by chunk, so that a batch's records need not all be in memory
+/// at once; the results do not depend on how the indices are chunked.
+///
+/// # Errors
+/// The error of the first (by run index) failing run.
+pub fn try_run_indices<T, E, F>(
+    indices: std::ops::Range<usize>,
+    base_seed: u64,
+    threads: Option<usize>,
+    progress: Option<&Progress>,
+    f: F,
+) -> Result<Vec<T>, E>
+where
+    T: Send,
+    E: Send,
+    F: Fn(usize, &mut ChaCha8Rng) -> Result<T, E> + Sync,
+{
+    let work = || {
+        indices
+            .into_par_iter()
+            .map(|i| {
+                let mut rng = run_rng(base_seed, i);
+                let out = f(i, &mut rng);
+                if let Some(p) = progress {
+                    p.report(ProgressEvent::RunFinished { index: i });
+                }
+                out
+            })
+            .collect::<Vec<Result<T, E>>>()
+    };
+    in_pool(threads, work).into_iter().collect()
+}
+
 fn in_pool<R: Send>(threads: Option<usize>, work: impl FnOnce() -> R + Send) -> R {
     match threads {
         Some(n) => match rayon::ThreadPoolBuilder::new().num_threads(n).build() {

@@ -394,17 +394,16 @@ impl CsvCell {
     }
 }
 
-/// Write mixed text/number records as CSV (RFC 4180 quoting for text cells).
+/// Build CSV text from mixed text/number records (RFC 4180 quoting for text cells);
+/// `path` labels errors.
 ///
 /// # Errors
-/// Bad headers or a record whose length differs from the header ([`SimError::Output`]),
-/// I/O errors.
-pub fn write_csv_records(
-    path: impl AsRef<Path>,
+/// Bad headers or a record whose length differs from the header ([`SimError::Output`]).
+pub fn csv_records_text(
+    path: &Path,
     headers: &[&str],
     records: &[Vec<CsvCell>],
-) -> Result<(), SimError> {
-    let path = path.as_ref();
+) -> Result<String, SimError> {
     check_headers(path, headers)?;
     let mut out = headers.join(",");
     out.push('\n');
@@ -423,7 +422,26 @@ pub fn write_csv_records(
         out.push_str(&cells.join(","));
         out.push('\n');
     }
-    write_text(path, &out)
+    Ok(out)
+}
+
+/// Write mixed text/number records as CSV (see [`csv_records_text`]).
+///
+/// # Errors
+/// As [`csv_records_text`], then I/O errors.
+pub fn write_csv_records(
+    path: impl AsRef<Path>,
+    headers: &[&str],
+    records: &[Vec<CsvCell>],
+) -> Result<(), SimError> {
+    let path = path.as_ref();
+    write_text(path, &csv_records_text(path, headers, records)?)
+}
+
+/// Format `x` with exactly `decimals` digits after the point (`fixed(0.5, 2)` =
+/// `0.50`): the number format of report prose and tables.
+pub fn fixed(x: f64, decimals: usize) -> String {
+    format!("{x:.decimals$}")
 }
 
 /// Format `x` with `decimals` digits after the point; integers (|x| < 1e15) print

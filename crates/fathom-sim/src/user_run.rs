@@ -12,9 +12,9 @@ use std::path::{Path, PathBuf};
 
 use serde::{Deserialize, Serialize};
 
+use crate::driver::{ExperimentResult, error_chain, execute_into};
 use crate::error::SimError;
-use crate::experiment::{Experiment, ExperimentContext, ExperimentResult, run_in_context};
-use crate::experiments;
+use crate::experiment::{DynExperiment, Environment, Job};
 use crate::progress::Progress;
 
 /// Marker file written by [`run_scenario`] into its output directory.
@@ -35,12 +35,12 @@ struct Peek {
 pub fn peek_experiment<'r>(
     text: &str,
     file: &str,
-    registry: &'r [Experiment],
-) -> Result<&'r Experiment, SimError> {
+    registry: &'r [&'static dyn DynExperiment],
+) -> Result<&'r dyn DynExperiment, SimError> {
     let peek: Peek = crate::scenario::parse_toml(text, file)?;
     let known = registry
         .iter()
-        .map(|e| format!("\"{}\"", e.name))
+        .map(|e| format!("\"{}\"", e.name()))
         .collect::<Vec<_>>()
         .join(", ");
     let name = match peek.experiment {
@@ -60,13 +60,17 @@ pub fn peek_experiment<'r>(
             ));
         }
     };
-    registry.iter().find(|e| e.name == name).ok_or_else(|| {
-        SimError::invalid(
-            file,
-            "experiment",
-            format!("unknown experiment {name:?}, expected one of {known}"),
-        )
-    })
+    registry
+        .iter()
+        .copied()
+        .find(|e| e.name() == name)
+        .ok_or_else(|| {
+            SimError::invalid(
+                file,
+                "experiment",
+                format!("unknown experiment {name:?}, expected one of {known}"),
+            )
+        })
 }
 
 /// The result of [`check_scenario`].
@@ -83,21 +87,6 @@ pub struct CheckedScenario {
     pub tables: usize,
 }
 
-/// A scenario check entry point: (text, file label) -> resolved TOML.
-pub type CheckFn = fn(&str, &str) -> Result<String, SimError>;
-
-/// The `check` entry point of the registered experiment `name`.
-pub fn checker(name: &str) -> Option<CheckFn> {
-    match name {
-        "fusion" => Some(experiments::fusion::check_scenario_text),
-        "noise" => Some(experiments::noise::check_scenario_text),
-        "beacons" => Some(experiments::beacons::check_scenario_text),
-        "vkf" => Some(experiments::vkf::check_scenario_text),
-        "plaza" => Some(crate::replay::plaza::check_scenario_text),
-        _ => None,
-    }
-}
-
 /// Parse and validate a scenario text without running it (`fathom check`).
 ///
 /// # Errors
@@ -106,22 +95,15 @@ pub fn checker(name: &str) -> Option<CheckFn> {
 pub fn check_scenario_text(
     text: &str,
     file: &str,
-    registry: &[Experiment],
+    registry: &[&'static dyn DynExperiment],
 ) -> Result<CheckedScenario, SimError> {
     let exp = peek_experiment(text, file, registry)?;
-    let check = checker(exp.name).ok_or_else(|| {
-        SimError::invalid(
-            file,
-            "experiment",
-            format!("experiment \"{}\" has no scenario check", exp.name),
-        )
-    })?;
-    let resolved_toml = check(text, file)?;
+    let resolved_toml = exp.resolve(text, file, None, None)?.toml;
     let value: toml::Table = toml::from_str(&resolved_toml)
         .map_err(|e| SimError::invalid_argument(format!("resolved `{file}`"), e.to_string()))?;
     let (keys, tables) = count_keys(&toml::Value::Table(value));
     Ok(CheckedScenario {
-        experiment: exp.name.to_string(),
+        experiment: exp.name().to_string(),
         resolved_toml,
         keys,
         tables,
@@ -132,7 +114,10 @@ pub fn check_scenario_text(
 ///
 /// # Errors
 /// [`SimError::Io`] if the file cannot be read, else as [`check_scenario_text`].
-pub fn check_scenario(path: &Path, registry: &[Experiment]) -> Result<CheckedScenario, SimError> {
+pub fn check_scenario(
+    path: &Path,
+    registry: &[&'static dyn DynExperiment],
+) -> Result<CheckedScenario, SimError> {
     let text = std::fs::read_to_string(path).map_err(|e| SimError::io("read", path, e))?;
     check_scenario_text(&text, &path.display().to_string(), registry)
 }
@@ -143,7 +128,7 @@ pub const EXIT_USAGE: u8 = 2;
 /// `fathom check <file>`: the line to print and the exit code (0 = valid,
 /// [`EXIT_USAGE`] = invalid). The error line names the file, the key path and, for
 /// TOML errors, the line; it is always one line.
-pub fn check_command(path: &Path, registry: &[Experiment]) -> (u8, String) {
+pub fn check_command(path: &Path, registry: &[&'static dyn DynExperiment]) -> (u8, String) {
     match check_scenario(path, registry) {
         Ok(c) => (
             0,
@@ -155,7 +140,7 @@ pub fn check_command(path: &Path, registry: &[Experiment]) -> (u8, String) {
                 c.tables
             ),
         ),
-        Err(e) => (EXIT_USAGE, one_line(&crate::experiment::error_chain(&e))),
+        Err(e) => (EXIT_USAGE, one_line(&error_chain(&e))),
     }
 }
 
@@ -242,7 +227,7 @@ pub struct RunOptions {
 /// refused output directory, the experiment's failure, or I/O errors.
 pub fn run_scenario(
     options: &RunOptions,
-    registry: &[Experiment],
+    registry: &[&'static dyn DynExperiment],
 ) -> Result<(ExperimentResult, RunInfo), SimError> {
     run_scenario_with_progress(options, registry, None)
 }
@@ -254,7 +239,7 @@ pub fn run_scenario(
 /// As [`run_scenario`].
 pub fn run_scenario_with_progress(
     options: &RunOptions,
-    registry: &[Experiment],
+    registry: &[&'static dyn DynExperiment],
     progress: Option<Progress>,
 ) -> Result<(ExperimentResult, RunInfo), SimError> {
     if options.seed.is_some_and(|s| i64::try_from(s).is_err()) {
@@ -279,71 +264,56 @@ pub fn run_scenario_with_progress(
     let path = &options.scenario;
     let label = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| SimError::io("read", path, e))?;
-    let checked = check_scenario_text(&text, &label, registry)?;
-    let exp = registry
-        .iter()
-        .find(|e| e.name == checked.experiment)
-        .ok_or_else(|| SimError::invalid(&label, "experiment", "not registered"))?;
-    let (resolved_toml, base_seed) = match options.seed {
-        None => {
-            let seed = top_level_base_seed(&checked.resolved_toml);
-            (checked.resolved_toml.clone(), seed)
-        }
-        Some(seed) => {
-            let text = with_base_seed(&checked.resolved_toml, seed).ok_or_else(|| {
-                SimError::invalid_argument(
-                    "--seed",
-                    format!(
-                        "experiment `{}` is deterministic (its scenario has no `base_seed`), \
-                         so there is no seed to set; run it without --seed",
-                        exp.name
-                    ),
-                )
-            })?;
-            (text, Some(seed))
-        }
-    };
+    run_scenario_text(&text, &label, options, registry, progress)
+}
+
+/// [`run_scenario_with_progress`] on a scenario text (`label` names it in messages and
+/// in `run_info.json`); `options.scenario` is not read.
+///
+/// # Errors
+/// As [`run_scenario`].
+pub fn run_scenario_text(
+    text: &str,
+    label: &str,
+    options: &RunOptions,
+    registry: &[&'static dyn DynExperiment],
+    progress: Option<Progress>,
+) -> Result<(ExperimentResult, RunInfo), SimError> {
+    let label = label.to_string();
+    let exp = peek_experiment(text, &label, registry)?;
+    // Checked (with the overrides) before the output folder is touched.
+    exp.resolve(text, &label, options.runs, options.seed)?;
     let out_dir = options
         .out_dir
         .clone()
-        .unwrap_or_else(|| Path::new("fathom-out").join(exp.name));
+        .unwrap_or_else(|| Path::new("fathom-out").join(exp.name()));
     prepare_out_dir(&out_dir)?;
-    let ctx = ExperimentContext {
-        name: exp.name.to_string(),
-        workspace_root: options.base_dir.clone(),
-        scenario_path: path.clone(),
-        scenario_label: label.clone(),
-        out_dir: out_dir.clone(),
+    let job = Job {
+        text,
+        file: &label,
         runs: options.runs,
-        threads: options.threads,
         seed: options.seed,
+        threads: options.threads,
         progress,
+        env: Environment {
+            base_dir: options.base_dir.clone(),
+        },
     };
-    let result = run_in_context(exp, &ctx)?;
-    if let Some(seed) = base_seed
-        && result.summary.base_seed != seed
-    {
-        return Err(SimError::invalid_argument(
-            format!("summary of experiment `{}`", exp.name),
-            format!(
-                "records base seed {}, but the run was asked to use {seed}",
-                result.summary.base_seed
-            ),
-        ));
-    }
-    crate::output::write_text(out_dir.join("scenario.toml"), &text)?;
+    let result = execute_into(exp, &job, &out_dir)?;
+    crate::output::write_text(out_dir.join("scenario.toml"), text)?;
     crate::output::write_text(
         out_dir.join("scenario.resolved.toml"),
-        &(resolved_header(exp.name, options.runs) + &resolved_toml),
+        &(resolved_header(exp.name()) + &result.resolved_toml),
     )?;
+    let deterministic = exp.resolve(text, &label, None, None)?.base_seed.is_none();
     let info = RunInfo {
         fathom_version: env!("CARGO_PKG_VERSION").to_string(),
-        experiment: exp.name.to_string(),
+        experiment: exp.name().to_string(),
         scenario: label,
         runs: options.runs,
         threads: options.threads,
         seed: options.seed,
-        base_seed,
+        base_seed: (!deterministic).then_some(result.summary.base_seed),
         elapsed_s: result.elapsed.as_secs_f64(),
     };
     let json = serde_json::to_string_pretty(&info)
@@ -353,51 +323,14 @@ pub fn run_scenario_with_progress(
 }
 
 /// The comment lines written above the resolved scenario: where it comes from and the
-/// command that reproduces the run (`--runs` is not folded into the file, since some
-/// experiments derive auxiliary run counts from it).
-fn resolved_header(experiment: &str, runs: Option<usize>) -> String {
-    let runs = runs.map(|n| format!(" --runs {n}")).unwrap_or_default();
+/// command that reproduces the run (the overrides are folded into the file).
+fn resolved_header(experiment: &str) -> String {
     format!(
         "# Resolved `{experiment}` scenario written by `fathom run` (fathom {}): defaults filled\n\
-         # in, base_seed = the seed actually used. Reproduce the run with\n\
-         #   fathom run scenario.resolved.toml{runs}\n\n",
+         # in, `--runs` and `--seed` folded in. Reproduce the run with\n\
+         #   fathom run scenario.resolved.toml\n\n",
         env!("CARGO_PKG_VERSION")
     )
-}
-
-/// The top-level `base_seed` of a resolved scenario, if it has one.
-fn top_level_base_seed(resolved_toml: &str) -> Option<u64> {
-    let table: toml::Table = toml::from_str(resolved_toml).ok()?;
-    table
-        .get("base_seed")?
-        .as_integer()
-        .and_then(|v| u64::try_from(v).ok())
-}
-
-/// `resolved_toml` (as written by an experiment's check: top-level keys before the
-/// first table header) with its top-level `base_seed` set to `seed`; `None` when it
-/// has no top-level `base_seed` (a deterministic experiment).
-fn with_base_seed(resolved_toml: &str, seed: u64) -> Option<String> {
-    top_level_base_seed(resolved_toml)?;
-    let mut out = String::with_capacity(resolved_toml.len() + 8);
-    let mut replaced = false;
-    let mut in_top_level = true;
-    for line in resolved_toml.split_inclusive('\n') {
-        let trimmed = line.trim_start();
-        if trimmed.starts_with('[') {
-            in_top_level = false;
-        }
-        let is_key = trimmed
-            .strip_prefix("base_seed")
-            .is_some_and(|rest| rest.trim_start().starts_with('='));
-        if in_top_level && !replaced && is_key {
-            out.push_str(&format!("base_seed = {seed}\n"));
-            replaced = true;
-        } else {
-            out.push_str(line);
-        }
-    }
-    (replaced && top_level_base_seed(&out) == Some(seed)).then_some(out)
 }
 
 /// Create `dir`, or accept it if empty or made by an earlier `fathom run`; then remove
@@ -422,34 +355,25 @@ fn prepare_out_dir(dir: &Path) -> Result<(), SimError> {
             std::fs::remove_file(&p).map_err(|e| SimError::io("remove", &p, e))?;
         }
     }
-    let entries = std::fs::read_dir(dir).map_err(|e| SimError::io("list directory", dir, e))?;
-    for entry in entries {
-        let p = entry
-            .map_err(|e| SimError::io("list directory", dir, e))?
-            .path();
-        let stale = p.is_file()
-            && p.extension()
-                .and_then(|x| x.to_str())
-                .is_some_and(|x| matches!(x, "svg" | "csv" | "json" | "md"));
-        if stale {
-            std::fs::remove_file(&p).map_err(|e| SimError::io("remove", &p, e))?;
-        }
-    }
     Ok(())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::experiments;
+
+    fn root() -> PathBuf {
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+    }
 
     #[test]
     fn every_preset_checks_and_round_trips() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
         let reg = experiments::registry();
         for exp in &reg {
-            let c = check_scenario(&root.join(exp.default_scenario), &reg).unwrap();
-            assert_eq!(c.experiment, exp.name);
-            assert!(c.keys > 5, "{}: {} keys", exp.name, c.keys);
+            let c = check_scenario(&root().join(exp.default_scenario()), &reg).unwrap();
+            assert_eq!(c.experiment, exp.name());
+            assert!(c.keys > 5, "{}: {} keys", exp.name(), c.keys);
             // The resolved TOML is itself a valid scenario.
             let again = check_scenario_text(&c.resolved_toml, "resolved", &reg).unwrap();
             assert_eq!(again.resolved_toml, c.resolved_toml);
@@ -457,48 +381,35 @@ mod tests {
     }
 
     #[test]
-    fn base_seed_is_replaced_only_at_top_level() {
-        let text = "experiment = \"x\"\nruns = 3\nbase_seed = 7\n\n[a]\nbase_seed = 9\n";
-        let out = with_base_seed(text, 42).unwrap();
-        assert_eq!(
-            out,
-            "experiment = \"x\"\nruns = 3\nbase_seed = 42\n\n[a]\nbase_seed = 9\n"
-        );
-        assert_eq!(top_level_base_seed(&out), Some(42));
-        assert_eq!(top_level_base_seed(text), Some(7));
-        // No top-level seed (a deterministic experiment): nothing to set.
-        assert_eq!(with_base_seed("runs = 3\n[a]\nbase_seed = 9\n", 1), None);
-        assert_eq!(top_level_base_seed("runs = 3\n[a]\nbase_seed = 9\n"), None);
-    }
-
-    #[test]
-    fn every_seeded_preset_resolves_with_a_new_seed() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
+    fn every_seeded_preset_resolves_with_a_new_seed_and_run_count() {
         let reg = experiments::registry();
         for exp in &reg {
-            let c = check_scenario(&root.join(exp.default_scenario), &reg).unwrap();
-            match with_base_seed(&c.resolved_toml, 123_456) {
-                Some(text) => {
-                    // Still a valid scenario of the same experiment, now with the seed.
-                    let again = check_scenario_text(&text, "resolved", &reg).unwrap();
-                    assert_eq!(top_level_base_seed(&again.resolved_toml), Some(123_456));
+            let text = std::fs::read_to_string(root().join(exp.default_scenario())).unwrap();
+            match exp.resolve(&text, "preset", Some(7), Some(123_456)) {
+                Ok(r) => {
+                    assert_eq!((r.runs, r.base_seed), (Some(7), Some(123_456)));
+                    // Still a valid scenario of the same experiment, now with both.
+                    let again = exp.resolve(&r.toml, "resolved", None, None).unwrap();
+                    assert_eq!(again, r);
                 }
-                None => assert_eq!(exp.name, "plaza", "only plaza is deterministic"),
+                Err(e) => {
+                    assert_eq!(exp.name(), "plaza", "only plaza is deterministic: {e}");
+                    assert!(e.to_string().contains("--seed"), "{e}");
+                }
             }
         }
     }
 
     #[test]
     fn seed_on_a_deterministic_experiment_and_huge_seeds_are_usage_errors() {
-        let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../..");
         let out = std::env::temp_dir().join(format!("fathom-sim-seed-{}", std::process::id()));
         let options = RunOptions {
-            scenario: root.join("scenarios/plaza.toml"),
+            scenario: root().join("scenarios/plaza.toml"),
             out_dir: Some(out.clone()),
             runs: None,
             threads: None,
             seed: Some(5),
-            base_dir: root.clone(),
+            base_dir: root(),
         };
         let reg = experiments::registry();
         let e = run_scenario(&options, &reg).unwrap_err();
@@ -508,7 +419,7 @@ mod tests {
         // Refused before anything is written.
         assert!(!out.exists());
         let huge = RunOptions {
-            scenario: root.join("scenarios/beacons.toml"),
+            scenario: root().join("scenarios/beacons.toml"),
             seed: Some(u64::MAX),
             ..options
         };

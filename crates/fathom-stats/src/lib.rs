@@ -1,7 +1,8 @@
 //! Evaluation statistics of fathom: distance-error series, per-run statistics
 //! (mean, population std, max, RMSE), Monte Carlo means with Student-t confidence
 //! intervals, sample covariances with per-entry intervals, histograms, and filter
-//! consistency tests (NEES / NIS with chi-square bounds).
+//! consistency tests (NEES / NIS with chi-square bounds), and the overlapping Allan
+//! variance of inertial-sensor records with its noise-figure readings ([`allan`]).
 //!
 //! Conventions (spec README): the distance error is the Euclidean norm of
 //! (estimated - true position) per instant, 3D over x, y, z or 2D over x, y; a run
@@ -47,15 +48,19 @@
 //! # Ok::<(), fathom_stats::StatsError>(())
 //! ```
 
+pub mod allan;
 pub mod consistency;
 pub mod covariance;
 pub mod error;
 pub mod error_series;
 pub mod histogram;
 pub mod monte_carlo;
+pub mod proportion;
 pub mod quantile;
 pub mod run_stats;
+pub mod sample;
 
+pub use allan::{AllanPoint, RateNoise, overlapping_allan_variance, white_noise_coefficient};
 pub use consistency::{ChiSquareBounds, nees, nis};
 pub use covariance::{
     CiMethod, CovarianceCi, MaxDeviation, MeanMode, covariance, covariance_ci_batch_means,
@@ -67,6 +72,10 @@ pub use error_series::{
     distance_series_3d,
 };
 pub use histogram::Histogram;
-pub use monte_carlo::{AggregateRow, Aggregator, MeanCi, MeanInterval, mean_ci, mean_interval};
+pub use monte_carlo::{
+    AggregateRow, Aggregator, MeanCi, MeanInterval, mean_and_ci95, mean_ci, mean_interval,
+};
+pub use proportion::{MedianCi, Proportion, clopper_pearson, median_ci};
 pub use quantile::{chi2_cdf, chi2_quantile, normal_quantile, student_t_quantile};
 pub use run_stats::RunStats;
+pub use sample::{Quartiles, median, paired_mean_ci, quantile, rms};

@@ -44,6 +44,13 @@ pub struct MeanCi {
     pub std: f64,
 }
 
+impl MeanCi {
+    /// The 95 % interval, or `[mean, mean]` for a single run (no spread estimate).
+    pub fn bounds(&self) -> [f64; 2] {
+        self.ci95.unwrap_or([self.mean, self.mean])
+    }
+}
+
 /// Mean over runs with a Student-t confidence interval at `level` (e.g. 0.95).
 ///
 /// # Errors
@@ -88,6 +95,16 @@ pub fn mean_ci(values: &[f64]) -> Result<MeanCi, StatsError> {
         n: m.n,
         std: m.std,
     })
+}
+
+/// [`mean_ci`] as `(mean, [lo, hi])`, the interval being `[mean, mean]` for a single
+/// run: the `value` and `ci95` of a summary row.
+///
+/// # Errors
+/// As [`mean_interval`].
+pub fn mean_and_ci95(values: &[f64]) -> Result<(f64, [f64; 2]), StatsError> {
+    let m = mean_ci(values)?;
+    Ok((m.mean, m.bounds()))
 }
 
 /// One aggregated row: a (method, metric) key and its [`MeanCi`] over runs.

@@ -74,4 +74,20 @@ pub enum TrajError {
         /// Number detected.
         detected: usize,
     },
+    /// A simulated flight left the finite numbers (unstable gains, absurd input).
+    #[error("flight diverged at t = {t} s: {what} is not finite")]
+    FlightDiverged {
+        /// Time of the step that diverged, s.
+        t: f64,
+        /// What became non-finite.
+        what: String,
+    },
+    /// A flight did not finish its path within the allowed time.
+    #[error("path not completed within {max_duration} s (still at {phase})")]
+    PathNotCompleted {
+        /// The time limit, s.
+        max_duration: f64,
+        /// Where the guidance was.
+        phase: String,
+    },
 }

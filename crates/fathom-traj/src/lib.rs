@@ -1,5 +1,7 @@
 //! True trajectories for simulation: natural cubic splines, the `fusion` UUV
-//! mission, and the velocity-command kinematic motion of the `beacons` paper.
+//! mission, the velocity-command kinematic motion of the `beacons` paper, and the
+//! flown quadrotor of the `urban` paper ([`quadrotor`]: rigid body, cascaded control,
+//! path guidance).
 //!
 //! Everything here describes what the vehicle *really* did; sensors sample it and
 //! estimators never see it. Every trajectory implements [`Trajectory`], which gives
@@ -38,6 +40,7 @@
 
 pub mod error;
 pub mod fusion_mission;
+pub mod quadrotor;
 pub mod seabed;
 pub mod spline;
 pub mod spline_trajectory;

@@ -242,4 +242,39 @@ impl TrackModel<6, 3> {
             SMatrix::<f64, 3, 3>::identity() * (v * v),
         )
     }
+
+    /// Constant-velocity track in the paper-A layout with the discrete
+    /// white-noise-acceleration `Q` of standard deviation `accel_sigma` (m/s^2,
+    /// [`models::cv_discrete_white_accel_q_3d`]) and a position measurement of
+    /// standard deviation `pos_sigma` (m): the reading of paper A's tuning in the
+    /// notation of its references (Bar-Shalom; Li and Jilkov).
+    ///
+    /// # Errors
+    /// [`ArchitectureError::InvalidConfig`] for a bad `dt` or `accel_sigma`, or a
+    /// `pos_sigma` that is not positive and finite.
+    pub fn cv_position_3d_dwna(
+        dt: f64,
+        accel_sigma: f64,
+        pos_sigma: f64,
+    ) -> Result<Self, ArchitectureError> {
+        let invalid = |what: &str, e: EstimatorError| ArchitectureError::InvalidConfig {
+            what: what.into(),
+            reason: e.to_string(),
+        };
+        let f = models::cv_transition_3d(dt).map_err(|e| invalid("track model dt", e))?;
+        let q = models::cv_discrete_white_accel_q_3d(dt, accel_sigma)
+            .map_err(|e| invalid("track model acceleration std", e))?;
+        if !(pos_sigma.is_finite() && pos_sigma > 0.0) {
+            return Err(ArchitectureError::InvalidConfig {
+                what: "track model position std".into(),
+                reason: format!("must be positive and finite, got {pos_sigma}"),
+            });
+        }
+        Self::new(
+            f,
+            q,
+            models::cv_position_h_3d(),
+            SMatrix::<f64, 3, 3>::identity() * (pos_sigma * pos_sigma),
+        )
+    }
 }

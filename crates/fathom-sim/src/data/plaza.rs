@@ -230,7 +230,7 @@ pub struct PoseRecord {
 }
 
 /// A surveyed beacon.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct BeaconSite {
     /// Id as used in the range file.
     pub id: i64,
@@ -241,7 +241,7 @@ pub struct BeaconSite {
 }
 
 /// How to treat range rows whose time is earlier than the previous row's.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
 pub enum RangeOrder {
     /// Refuse the file ([`PlazaError::NonMonotonicTime`]).
     Strict,

@@ -4,6 +4,7 @@
 use fathom_traj::velocity_command::{VelocityCommandMotion, VelocityCommandParams};
 use nalgebra::Vector3;
 use rand::Rng;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::SimError;
@@ -11,16 +12,28 @@ use crate::scenario::{require_non_negative, require_positive};
 
 /// `[motion]`: the velocity-command kinematic motion of the beacons paper
 /// (Tables 1 and 9).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MotionToml {
-    /// Run length, s.
+    /// Run length (paper: 180).
+    ///
+    /// Unit: s. Range: > 0, at least one step.
     pub duration_s: f64,
-    /// Motion integration step, s.
+    /// Motion integration step (paper: 0.01).
+    ///
+    /// Unit: s. Range: > 0.
     pub step_s: f64,
-    /// Commanded body velocity `(u, v, w, p, q, r)`, m/s and rad/s.
+    /// Commanded body velocity `(u, v, w, p, q, r)` (Table 1: 0.5, 0, 0.2, 0, 0, 0.5);
+    /// in `beacons`, `(u, v, w)` and `r` are also the filter's input before the first
+    /// DVL/AHRS sample.
+    ///
+    /// Unit: m/s, rad/s. Range: finite.
     pub command: [f64; 6],
-    /// Per-step Gaussian motion noise on each command component (same units).
+    /// Per-step Gaussian noise on each command component: the actual velocity is
+    /// command + N(0, σ²) (Table 9); in `beacons` it enters the filter's process noise
+    /// when `ekf.include_motion_noise`.
+    ///
+    /// Unit: m/s, rad/s. Range: each ≥ 0.
     pub motion_sigma: [f64; 6],
 }
 
@@ -70,10 +83,14 @@ pub fn generate_motion(
 }
 
 /// `[beacons]`: beacon positions in NED, m.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BeaconsToml {
-    /// One `[north, east, down]` triple per beacon.
+    /// Beacon positions `[north, east, down]` (not given by the paper; keep them
+    /// non-coplanar, or the ranges cannot fix the 3D position). `noise` needs exactly
+    /// four (the paper's matrices are 5×5); `beacons` takes any number.
+    ///
+    /// Unit: m (NED). Range: finite; at least one beacon (`noise`: exactly 4).
     pub positions: Vec<[f64; 3]>,
 }
 

@@ -1,27 +1,24 @@
-//! The paper experiments run by `cargo xtask paper`, and their registry.
-//!
-//! Each experiment module owns its scenario schema (serde structs with
-//! `deny_unknown_fields`), converts it into the checked parameter types of the
-//! library crates, runs the Monte Carlo batch and writes figures and CSV files;
-//! [`crate::run_paper`] writes `summary.json` and `report.md` from what it returns.
+//! The registered experiments: one folder each (scenario, one run, analysis,
+//! figures, report), and the registry that every front end reads.
 
 pub mod beacons;
 pub mod common;
 pub mod fusion;
 pub mod noise;
 pub mod plaza;
-pub mod single_run;
 pub mod vkf;
 
-use crate::experiment::Experiment;
+use crate::experiment::DynExperiment;
 
-/// All registered paper experiments, in report order.
-pub fn registry() -> Vec<Experiment> {
+/// Every registered experiment, in report order. Adding an experiment means a new
+/// folder and one line here; `fathom list / run / check`, `cargo xtask paper`, the
+/// benchmarks and the fuzz targets all read this list.
+pub fn registry() -> Vec<&'static dyn DynExperiment> {
     vec![
-        fusion::EXPERIMENT,
-        noise::EXPERIMENT,
-        beacons::EXPERIMENT,
-        vkf::EXPERIMENT,
-        plaza::EXPERIMENT,
+        &fusion::Fusion,
+        &noise::Noise,
+        &beacons::Beacons,
+        &vkf::Vkf,
+        &plaza::Plaza,
     ]
 }

@@ -2,10 +2,8 @@
 //! and the `fathom replay` command.
 //!
 //! - [`plaza`]: range-beacon localization on the CMU Plaza logs: settings (TOML
-//!   schema and checked form), the run (dead reckoning, AS / SC / SI, ablations) and
-//!   the range-error analysis against ground truth;
-//! - [`plaza_output`]: its CSV series, SVG figures, `summary.json` rows and claims,
-//!   and the report text.
+//!   schema and checked form), the prepared event stream, the methods (dead reckoning,
+//!   AS / SC / SI, ablations) and the range-error analysis against ground truth. Its
+//!   outputs are the `plaza` experiment's ([`crate::experiments::plaza`]).
 
 pub mod plaza;
-pub mod plaza_output;

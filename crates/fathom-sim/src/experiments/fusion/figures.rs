@@ -2,11 +2,12 @@
 
 use fathom_traj::{FusionMission, Trajectory};
 
+use super::analysis::{RunResult, SWEEP_METHODS, SweepResult};
+use super::scenario::FusionSetup;
 use super::sim::Method;
-use super::{FusionSetup, RunResult, SWEEP_METHODS, SweepResult};
 use crate::SimError;
-use crate::experiment::ExperimentContext;
-use crate::output::{CsvCell, write_csv_columns, write_csv_records};
+use crate::experiment::Analysis;
+use crate::output::CsvCell;
 use crate::plot::{Histogram, LinePlot, PlanPlot, Series};
 
 /// The filters (methods that have a path and an error figure of their own).
@@ -39,7 +40,7 @@ fn xy(times: &[f64], ys: &[f64]) -> Vec<(f64, f64)> {
 
 /// Writes every figure and CSV file.
 pub(super) fn write_all(
-    ctx: &ExperimentContext,
+    out: &mut Analysis,
     setup: &FusionSetup,
     mission: &FusionMission,
     results: &[RunResult],
@@ -73,14 +74,16 @@ pub(super) fn write_all(
             .pos_in_nav;
         cc_pts.push((p.y, p.x));
     }
-    PlanPlot::new(
-        "fusion mission, plan view (course changes marked)",
-        "east (m)",
-        "north (m)",
-    )
-    .with_path(Series::new("true path", truth_plan.clone()))
-    .with_markers(Series::new("course change", cc_pts))
-    .write_svg(ctx.out_file("mission_plan.svg"))?;
+    out.figure(
+        "mission_plan.svg",
+        &PlanPlot::new(
+            "fusion mission, plan view (course changes marked)",
+            "east (m)",
+            "north (m)",
+        )
+        .with_path(Series::new("true path", truth_plan.clone()))
+        .with_markers(Series::new("course change", cc_pts)),
+    )?;
     let mut dp = LinePlot::new(
         "fusion mission, depth versus time (course changes marked)",
         "time (s)",
@@ -88,7 +91,7 @@ pub(super) fn write_all(
     )
     .with_series(Series::new("depth", depth));
     dp.markers_x = cc.to_vec();
-    dp.write_svg(ctx.out_file("mission_depth.svg"))?;
+    out.figure("mission_depth.svg", &dp)?;
 
     // --- Figs. 7-12: paths, errors, histograms per filter --------------------
     let paths = run0
@@ -105,14 +108,16 @@ pub(super) fn write_all(
     for m in FILTERS {
         let est = &paths[m.index()];
         let est_plan: Vec<(f64, f64)> = est.iter().map(|p| (p.y, p.x)).collect();
-        PlanPlot::new(
-            format!("{}: estimated vs true path (run 0)", m.name()),
-            "east (m)",
-            "north (m)",
-        )
-        .with_path(Series::new("true", truth_plan.clone()))
-        .with_path(Series::new(m.name(), est_plan))
-        .write_svg(ctx.out_file(&format!("path_{}.svg", m.slug())))?;
+        out.figure(
+            &format!("path_{}.svg", m.slug()),
+            &PlanPlot::new(
+                format!("{}: estimated vs true path (run 0)", m.name()),
+                "east (m)",
+                "north (m)",
+            )
+            .with_path(Series::new("true", truth_plan.clone()))
+            .with_path(Series::new(m.name(), est_plan)),
+        )?;
         let zoom_true: Vec<(f64, f64)> = times
             .iter()
             .zip(true_path)
@@ -139,7 +144,7 @@ pub(super) fn write_all(
             zp = zp
                 .with_markers(Series::new("true samples", zoom_true))
                 .with_markers(Series::new(format!("{} samples", m.name()), zoom_est));
-            zp.write_svg(ctx.out_file(&format!("path_{}_zoom.svg", m.slug())))?;
+            out.figure(&format!("path_{}_zoom.svg", m.slug()), &zp)?;
         }
         let i = m.index();
         let mean3 = mean_series(results, |r| &r.output.err_3d[i]);
@@ -158,7 +163,7 @@ pub(super) fn write_all(
         ));
         ep.markers_x = cc.to_vec();
         ep.shaded_x = cc.iter().map(|c| (c - hw, c + hw)).collect();
-        ep.write_svg(ctx.out_file(&format!("err3d_{}.svg", m.slug())))?;
+        out.figure(&format!("err3d_{}.svg", m.slug()), &ep)?;
 
         let pooled: Vec<f64> = results
             .iter()
@@ -167,14 +172,16 @@ pub(super) fn write_all(
         let h = fathom_stats::Histogram::new(&pooled, setup.histogram_bins)
             .map_err(|e| SimError::model("error histogram", e))?;
         let total = h.total().max(1) as f64;
-        Histogram::new(
-            format!("{}: 3D error histogram (all runs, all times)", m.name()),
-            "3D error (m)",
-            "fraction of samples",
-            h.edges.clone(),
-            h.counts.iter().map(|&c| c as f64 / total).collect(),
-        )
-        .write_svg(ctx.out_file(&format!("hist3d_{}.svg", m.slug())))?;
+        out.figure(
+            &format!("hist3d_{}.svg", m.slug()),
+            &Histogram::new(
+                format!("{}: 3D error histogram (all runs, all times)", m.name()),
+                "3D error (m)",
+                "fraction of samples",
+                h.edges.clone(),
+                h.counts.iter().map(|&c| c as f64 / total).collect(),
+            ),
+        )?;
     }
 
     // --- Fig. 13: 2D errors; all 3D errors; INS drift ------------------------
@@ -201,11 +208,11 @@ pub(super) fn write_all(
     }
     p2.markers_x = cc.to_vec();
     p3.markers_x = cc.to_vec();
-    p2.write_svg(ctx.out_file("err2d.svg"))?;
-    p3.write_svg(ctx.out_file("err3d_all.svg"))?;
+    out.figure("err2d.svg", &p2)?;
+    out.figure("err3d_all.svg", &p3)?;
 
     let ins_fb = mean_series(results, |r| &r.output.ins_err_with_feedback);
-    LinePlot::new(
+    out.figure("ins_drift.svg", &LinePlot::new(
         format!(
             "sensor position errors, mean of {} runs (INS integrator with and without EFF feedback)",
             results.len()
@@ -222,15 +229,17 @@ pub(super) fn write_all(
         xy(times, &mean_series(results, |r| &r.output.err_3d[Method::DvlDr.index()])),
     ))
     .with_series(Series::new("INS under EFF feedback", xy(times, &ins_fb)))
-    .write_svg(ctx.out_file("ins_drift.svg"))?;
+    )?;
 
     // --- Sensitivity ----------------------------------------------------------
     let mut sens_records = Vec::new();
     for s in sweeps {
         let mut plot = LinePlot::new(
             format!(
-                "sensitivity: mean 3D error vs {} ({} runs per value)",
-                s.label, setup.sensitivity_runs
+                "sensitivity: mean 3D error vs {} ({} reading, {} runs per value)",
+                s.label,
+                s.reading.name(),
+                setup.sensitivity_runs
             ),
             format!("log10 {}", s.label),
             "mean 3D error (m)",
@@ -245,6 +254,7 @@ pub(super) fn write_all(
             plot.series.push(Series::new(m.name(), pts));
             for (v, row) in s.values.iter().zip(&s.means) {
                 sens_records.push(vec![
+                    CsvCell::from(s.reading.name()),
                     CsvCell::from(s.key),
                     CsvCell::from(*v),
                     CsvCell::from(m.name()),
@@ -254,11 +264,15 @@ pub(super) fn write_all(
                 ]);
             }
         }
-        plot.write_svg(ctx.out_file(&format!("sensitivity_{}.svg", s.key)))?;
+        out.figure(
+            &format!("sensitivity_{}_{}.svg", s.key, s.reading.name()),
+            &plot,
+        )?;
     }
-    write_csv_records(
-        ctx.out_file("sensitivity.csv"),
+    out.csv_records(
+        "sensitivity.csv",
         &[
+            "reading",
             "sweep",
             "value",
             "method",
@@ -283,7 +297,7 @@ pub(super) fn write_all(
     cols.push(ins_fb);
     let h: Vec<&str> = headers.iter().map(String::as_str).collect();
     let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    write_csv_columns(ctx.out_file("error_series.csv"), &h, &c)?;
+    out.csv_columns("error_series.csv", &h, &c)?;
 
     let mut headers = vec!["time_s".to_string()];
     let mut cols: Vec<Vec<f64>> = vec![times.clone()];
@@ -299,7 +313,7 @@ pub(super) fn write_all(
     }
     let h: Vec<&str> = headers.iter().map(String::as_str).collect();
     let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    write_csv_columns(ctx.out_file("run0_paths.csv"), &h, &c)?;
+    out.csv_columns("run0_paths.csv", &h, &c)?;
 
     let mut records = Vec::new();
     for (run, r) in results.iter().enumerate() {
@@ -319,8 +333,8 @@ pub(super) fn write_all(
             }
         }
     }
-    write_csv_records(
-        ctx.out_file("per_run_metrics.csv"),
+    out.csv_records(
+        "per_run_metrics.csv",
         &[
             "run",
             "method",

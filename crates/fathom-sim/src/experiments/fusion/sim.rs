@@ -105,19 +105,56 @@ impl Method {
     }
 }
 
-/// Filter tuning (paper A: `Q = w^2 I6`, `R = v^2 I3`) and the initial covariance.
+/// How the paper's printed tuning letters `w` and `v` are read.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reading {
+    /// The notation of the paper's references (Bar-Shalom; Li and Jilkov): `v` is the
+    /// process noise (white acceleration std, m/s^2, discrete white-noise-acceleration
+    /// `Q`) and `w` the measurement noise (position std, m). Every printed unit is
+    /// consistent.
+    BarShalom,
+    /// The letters as in Welch and Bishop: `Q = w^2 I6`, `R = v^2 I3`, which needs two
+    /// unit repairs (m/s^2 read as m in `R`; a metre std on the velocity states).
+    AsPrinted,
+}
+
+impl Reading {
+    /// The scenario spelling (`bar_shalom`, `as_printed`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Reading::BarShalom => "bar_shalom",
+            Reading::AsPrinted => "as_printed",
+        }
+    }
+
+    /// The other reading.
+    pub fn other(self) -> Reading {
+        match self {
+            Reading::BarShalom => Reading::AsPrinted,
+            Reading::AsPrinted => Reading::BarShalom,
+        }
+    }
+}
+
+/// Filter tuning (the paper's `w`, `v` under a [`Reading`]) and the initial covariance.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FilterTuning {
-    /// Process noise scale of the INS track, m (paper: 10).
+    /// How `w` and `v` are read.
+    pub reading: Reading,
+    /// The paper's `w_INS` (10): INS position std, m (`bar_shalom`), or process
+    /// noise scale, m (`as_printed`).
     pub w_ins: f64,
-    /// Process noise scale of the DVL track, m (paper: 1).
+    /// The paper's `w_DVL` (1), read like `w_ins`.
     pub w_dvl: f64,
-    /// Measurement noise std of the INS position, m (paper: 9.8, "1 g").
+    /// The paper's `v_INS` (9.8, "1 g"): INS-filter acceleration std, m/s^2
+    /// (`bar_shalom`), or INS position std, m (`as_printed`).
     pub v_ins: f64,
-    /// Measurement noise std of the DVL position, m (paper: 0.02).
+    /// The paper's `v_DVL` (0.02), read like `v_ins`.
     pub v_dvl: f64,
-    /// Process noise scale of the MF filter, m (setting; default 1).
+    /// Process noise scale of the MF filter under `as_printed`, m (setting).
     pub w_mf: f64,
+    /// Acceleration std of the MF filter under `bar_shalom`, m/s^2 (setting).
+    pub mf_accel_sigma: f64,
     /// Initial position std of every filter, m.
     pub p0_pos: f64,
     /// Initial velocity std of every filter, m/s.
@@ -140,7 +177,7 @@ pub struct RunConfig {
 }
 
 /// Per-time errors of one run.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct RunOutput {
     /// Evaluation times `k step`, `k = 1..=n_steps`, s.
     pub times: Vec<Time>,
@@ -159,7 +196,7 @@ pub struct RunOutput {
 }
 
 /// Per-run statistics of one method.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MethodMetrics {
     /// Mean 3D error over time, m.
     pub mean_3d: f64,
@@ -271,12 +308,29 @@ fn prior(cfg: &RunConfig, traj: &SplineTrajectory) -> Result<Gaussian<6>, SimErr
         .map_err(|e| SimError::model("filter prior", e))
 }
 
+/// The INS and DVL track models under the tuning's reading.
 fn models(cfg: &RunConfig) -> Result<(TrackModel<6, 3>, TrackModel<6, 3>), SimError> {
     let t = &cfg.tuning;
+    let track = |w: f64, v: f64| match t.reading {
+        Reading::BarShalom => TrackModel::cv_position_3d_dwna(cfg.step, v, w),
+        Reading::AsPrinted => TrackModel::cv_position_3d(cfg.step, w, v),
+    };
     Ok((
-        TrackModel::cv_position_3d(cfg.step, t.w_ins, t.v_ins).map_err(arch("INS track model"))?,
-        TrackModel::cv_position_3d(cfg.step, t.w_dvl, t.v_dvl).map_err(arch("DVL track model"))?,
+        track(t.w_ins, t.v_ins).map_err(arch("INS track model"))?,
+        track(t.w_dvl, t.v_dvl).map_err(arch("DVL track model"))?,
     ))
+}
+
+/// The MF filter's process noise under the tuning's reading.
+fn mf_process_noise(cfg: &RunConfig) -> Result<SMatrix<f64, 6, 6>, SimError> {
+    let t = &cfg.tuning;
+    match t.reading {
+        Reading::BarShalom => {
+            fathom_estimators::models::cv_discrete_white_accel_q_3d(cfg.step, t.mf_accel_sigma)
+        }
+        Reading::AsPrinted => fathom_estimators::models::cv_scaled_identity_q_3d(t.w_mf),
+    }
+    .map_err(|e| SimError::model("MF process noise", e))
 }
 
 fn tracks(
@@ -335,22 +389,22 @@ pub fn simulate_run(
             Method::DvlDr => est.extend((1..=n).map(pos_dvl)),
             Method::Mf => {
                 let h = DMatrix::from_fn(3, 6, |r, c| if c == 2 * r { 1.0 } else { 0.0 });
-                let t = &cfg.tuning;
+                // The sensors' R are those of their tracks (the reading decides them).
+                let (mi, md) = models(cfg)?;
+                let r_of = |m: &TrackModel<6, 3>| DMatrix::from_fn(3, 3, |i, j| m.r()[(i, j)]);
                 let blocks = [
                     SensorBlock {
                         name: "INS".into(),
                         h: h.clone(),
-                        r: DMatrix::identity(3, 3) * t.v_ins.powi(2),
+                        r: r_of(&mi),
                     },
                     SensorBlock {
                         name: "DVL".into(),
                         h,
-                        r: DMatrix::identity(3, 3) * t.v_dvl.powi(2),
+                        r: r_of(&md),
                     },
                 ];
-                let (mi, _) = models(cfg)?;
-                let q = fathom_estimators::models::cv_scaled_identity_q_3d(t.w_mf)
-                    .map_err(|e| SimError::model("MF process noise", e))?;
+                let q = mf_process_noise(cfg)?;
                 let mut mf =
                     MeasurementFusion::<6, 6>::new(prior(cfg, traj)?, t0, *mi.f(), q, &blocks)
                         .map_err(arch("measurement fusion"))?;

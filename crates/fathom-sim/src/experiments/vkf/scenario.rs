@@ -14,118 +14,191 @@ use fathom_sensors::underwater::{
     BottomLockDvlModel, BottomLockDvlParams, EchoSounder, PropellerRpm,
 };
 use fathom_traj::SeabedProfile;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 use crate::SimError;
 use crate::scenario::{require_in_range, require_non_negative, require_positive};
 
-/// The `vkf` scenario file.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+/// Velocity-filter-aided INS.
+///
+/// Paper C (2013, seed 002) §3.2, eqs. (5)-(12) as rebuilt in spec C: a strapdown INS
+/// at 100 Hz and a DVL at 5 Hz that loses bottom lock over deep water; PINS, INS-DVL,
+/// the velocity Kalman filter (VKF) with its switching box, a gated INS-DVL and a
+/// 15-state ESKF. Data-sheet units (deg/h, mg, ppm, knots) are converted once when
+/// checked. Preset: `scenarios/vkf.toml`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct VkfScenario {
-    /// The experiment this scenario is for: must be `"vkf"` (lets `fathom run`
-    /// pick the experiment from the file).
+    /// The experiment this file is for.
+    ///
+    /// Range: `"vkf"`.
     pub experiment: String,
-    /// Monte Carlo runs.
+    /// Monte Carlo runs (spec: ≥ 50); `--runs` overrides.
+    ///
+    /// Range: ≥ 2.
     pub runs: usize,
-    /// Base seed; run `i` uses ChaCha stream `i`.
+    /// Run `i` uses ChaCha stream `i` of this seed.
+    ///
+    /// Range: 0 … 2⁶⁴−1.
     pub base_seed: u64,
-    /// Runs of the literal-bias configuration (0 = skip it).
+    /// Runs of the extra configuration with the literal ±0.5 m/s DVL bias
+    /// (`dvl.literal_bias_half_width_mps`); 0 skips it; at most `runs` (after
+    /// `--runs`).
+    ///
+    /// Range: 0 or ≥ 2.
     pub literal_bias_runs: usize,
-    /// The route.
+    /// A run whose final horizontal error exceeds this counts in the rows
+    /// `runs_final_h_beyond_threshold` (a method that loses lock in some runs has a
+    /// heavy-tailed final error).
+    ///
+    /// Unit: m. Range: > 0.
+    pub final_h_threshold_m: f64,
+    /// The route (paper §3.2).
     pub route: RouteToml,
-    /// The seabed profile.
+    /// The seabed profile along the track.
     pub seabed: SeabedToml,
-    /// IMU error figures (data-sheet units).
+    /// IMU errors, 1 σ per axis (HG1700 figures ÷ 10, "0.1 deg/hr class").
     pub imu: ImuToml,
-    /// DVL.
+    /// Bottom-lock DVL, `v = (1 + sf) v_true + b + w` in NED.
     pub dvl: DvlToml,
-    /// Echo sounder.
+    /// The echo sounder.
     pub echo_sounder: EchoSounderToml,
     /// Propeller RPM.
     pub rpm: RpmToml,
     /// Depth gauge.
     pub depth_gauge: DepthGaugeToml,
-    /// Velocity Kalman filter.
+    /// Velocity Kalman filter `[V, sf, b]` (eq. 6; settings, the paper gives none).
     pub vkf: VkfToml,
-    /// 9-state filter (and shared filter settings).
+    /// The 9-state `[p, v, accel bias]` filter, shared settings.
     pub nav_filter: NavFilterToml,
-    /// 15-state ESKF.
+    /// The 15-state error-state filter.
     pub eskf: EskfToml,
 }
 
 /// `[route]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RouteToml {
-    /// Start latitude, deg.
+    /// Start latitude (paper: 35 N).
+    ///
+    /// Unit: deg. Range: [-85, 85].
     pub lat_deg: f64,
-    /// Start longitude, deg.
+    /// Start longitude (paper: 129 E).
+    ///
+    /// Unit: deg. Range: [-180, 180].
     pub lon_deg: f64,
-    /// Constant depth, m.
+    /// Constant vehicle depth.
+    ///
+    /// Unit: m. Range: ≥ 0.
     pub depth_m: f64,
-    /// Initial heading, deg.
+    /// Initial heading, clockwise from north.
+    ///
+    /// Unit: deg. Range: finite.
     pub heading_deg: f64,
-    /// Initial speed, m/s.
+    /// Speed at t = 0; also the VKF's initial speed estimate.
+    ///
+    /// Unit: m/s. Range: ≥ 0.
     pub initial_speed_mps: f64,
-    /// Cruise speed, kn.
+    /// Cruise speed (paper: 10).
+    ///
+    /// Unit: kn. Range: > 0.
     pub cruise_speed_kn: f64,
-    /// Acceleration (half-cosine ramp) duration, s.
+    /// Duration of the half-cosine speed ramp from the initial to the cruise speed.
+    ///
+    /// Unit: s. Range: > 0.
     pub accel_duration_s: f64,
-    /// Mission duration, s.
+    /// Mission length (paper: 27 min = 1620).
+    ///
+    /// Unit: s. Range: > 0, a whole number of IMU intervals, ≥ 200 of them.
     pub duration_s: f64,
-    /// IMU / computation rate, Hz (a whole number: errors are recorded every 1 s).
+    /// IMU and strapdown rate (paper: 100); errors are recorded every 1 s.
+    ///
+    /// Unit: Hz. Range: > 0, a whole number.
     pub imu_rate_hz: f64,
     /// Coordinated turns.
     pub turns: Vec<TurnToml>,
 }
 
 /// One `[[route.turns]]` entry.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct TurnToml {
-    /// Start, s.
+    /// Start of a coordinated turn.
+    ///
+    /// Unit: s. Range: finite.
     pub start_s: f64,
-    /// Total duration including ramps, s.
+    /// Total turn duration including both ramps.
+    ///
+    /// Unit: s. Range: ≥ 2 `ramp_s`.
     pub duration_s: f64,
-    /// Ramp length, s.
+    /// Length of each half-cosine rate ramp.
+    ///
+    /// Unit: s. Range: > 0.
     pub ramp_s: f64,
-    /// Peak turn rate, deg/s (positive to starboard).
+    /// Peak turn rate, positive to starboard (clockwise seen from above); overlapping
+    /// turns add.
+    ///
+    /// Unit: deg/s. Range: finite.
     pub rate_deg_s: f64,
 }
 
 /// `[seabed]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SeabedToml {
-    /// `[time s, seabed depth m]` knots.
+    /// Seabed depth under the track `[time, depth]`, linear in between and held
+    /// outside; altitude = seabed depth − `route.depth_m` (the paper's deep water:
+    /// altitude > 100 m during 5-8 min and 15-16 min).
+    ///
+    /// Unit: s, m. Range: ≥ 2 knots, times strictly increasing, depths ≥ 0.
     pub knots: Vec<[f64; 2]>,
 }
 
 /// `[imu]`: 1-sigma figures per axis in data-sheet units (converted once by
 /// [`ImuSpecParams::check`]).
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ImuToml {
-    /// Gyro turn-on bias, deg/hr.
+    /// Gyro turn-on bias, drawn per run.
+    ///
+    /// Unit: deg/h. Range: ≥ 0.
     pub gyro_bias_deg_per_hr: f64,
-    /// Gyro bias instability (Gauss-Markov sigma), deg/hr.
+    /// Gyro bias instability (first-order Gauss-Markov σ; not in the paper).
+    ///
+    /// Unit: deg/h. Range: ≥ 0.
     pub gyro_bias_instability_deg_per_hr: f64,
-    /// Its correlation time, s.
+    /// Its correlation time (not in the paper).
+    ///
+    /// Unit: s. Range: > 0.
     pub gyro_bias_corr_time_s: f64,
-    /// Gyro angle random walk, deg/sqrt(hr).
+    /// Gyro angle random walk.
+    ///
+    /// Unit: deg/√h. Range: ≥ 0.
     pub gyro_arw_deg_per_sqrt_hr: f64,
-    /// Gyro scale factor, ppm.
+    /// Gyro scale-factor error σ.
+    ///
+    /// Unit: ppm. Range: ≥ 0.
     pub gyro_scale_factor_ppm: f64,
-    /// Accelerometer turn-on bias, mg.
+    /// Accelerometer turn-on bias, drawn per run.
+    ///
+    /// Unit: mg. Range: ≥ 0.
     pub accel_bias_mg: f64,
-    /// Accelerometer bias instability (Gauss-Markov sigma), mg.
+    /// Accelerometer bias instability (Gauss-Markov σ; not in the paper).
+    ///
+    /// Unit: mg. Range: ≥ 0.
     pub accel_bias_instability_mg: f64,
-    /// Its correlation time, s.
+    /// Its correlation time (not in the paper).
+    ///
+    /// Unit: s. Range: > 0.
     pub accel_bias_corr_time_s: f64,
-    /// Velocity random walk, m/s/sqrt(s).
+    /// Accelerometer velocity random walk (HG1700: 0.065 ft/s/√h = 3.3e-4 m/s/√s).
+    ///
+    /// Unit: m/s/√s. Range: ≥ 0.
     pub accel_vrw_mps_per_sqrt_s: f64,
-    /// Accelerometer scale factor, ppm.
+    /// Accelerometer scale-factor error σ.
+    ///
+    /// Unit: ppm. Range: ≥ 0.
     pub accel_scale_factor_ppm: f64,
 }
 
@@ -147,112 +220,188 @@ impl ImuToml {
 }
 
 /// `[dvl]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DvlToml {
-    /// Output rate, Hz: a whole number that divides the IMU rate. The echo sounder,
-    /// RPM and depth gauge sample at the same epochs, where the filters update.
+    /// Output rate (paper: 5); the echo sounder, RPM and depth gauge sample at the same
+    /// epochs, where the filters update.
+    ///
+    /// Unit: Hz. Range: a whole number of Hz that divides `route.imu_rate_hz`.
     pub rate_hz: f64,
-    /// Bottom-lock range, m.
+    /// Bottom-lock range: largest altitude with valid output (paper: 100); also the
+    /// switching box's threshold on the measured altitude.
+    ///
+    /// Unit: m. Range: > 0.
     pub range_m: f64,
-    /// Half width of the uniform scale-factor error, a fraction (0.002 = 0.2 %), drawn
-    /// per run and common to the axes.
+    /// Half width of the uniform scale-factor error `sf`, drawn per run, common to the
+    /// axes (0.002 = ±0.2 %).
+    ///
+    /// Unit: - (fraction). Range: ≥ 0.
     pub scale_factor_half_width: f64,
-    /// Half width of the uniform bias per axis, m/s (the paper reading, 0.005).
+    /// Half width of the uniform bias `b`, drawn per run and axis; the paper's "±0.5
+    /// m/s" read as ±0.5 cm/s = 0.005.
+    ///
+    /// Unit: m/s. Range: ≥ 0.
     pub bias_half_width_mps: f64,
-    /// Half width of the literal-reading bias, m/s (0.5).
+    /// The same for the extra configuration with the literal reading (0.5), run
+    /// `literal_bias_runs` times.
+    ///
+    /// Unit: m/s. Range: ≥ 0.
     pub literal_bias_half_width_mps: f64,
-    /// White noise sigma, m/s.
+    /// σ of the white noise `w` per axis (spec C: 0.02).
+    ///
+    /// Unit: m/s. Range: ≥ 0.
     pub sigma_mps: f64,
-    /// Half width of the uniform error beyond range, m/s.
+    /// Beyond the range, `U(-g, g)` is added to each component (bottom lock lost,
+    /// output not flagged; spec C: 5).
+    ///
+    /// Unit: m/s. Range: ≥ 0.
     pub garbage_half_width_mps: f64,
 }
 
 /// `[echo_sounder]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EchoSounderToml {
-    /// Noise sigma, m.
+    /// Altitude noise σ; the measured altitude drives the switching box.
+    ///
+    /// Unit: m. Range: ≥ 0.
     pub sigma_m: f64,
 }
 
 /// `[rpm]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RpmToml {
-    /// True speed constant, m/s per rpm.
+    /// True speed constant k: `rpm = (V_fwd - b) / k + N(0, σ²)` (spec C: 0.01).
+    ///
+    /// Unit: m/s per rpm. Range: > 0.
     pub k_mps_per_rpm: f64,
-    /// True speed offset, m/s.
+    /// True speed offset b (spec C: 0.05).
+    ///
+    /// Unit: m/s. Range: finite.
     pub b_mps: f64,
-    /// Revolution noise sigma, rpm (the VKF assumes the same value).
+    /// Revolution noise σ; the VKF assumes the same value.
+    ///
+    /// Unit: rpm. Range: ≥ 0.
     pub sigma_rpm: f64,
 }
 
 /// `[depth_gauge]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DepthGaugeToml {
-    /// Noise sigma, m; also the depth measurement sigma of every filter.
+    /// Depth noise σ; also the depth measurement σ of every filter (damps the vertical
+    /// channel).
+    ///
+    /// Unit: m. Range: > 0.
     pub sigma_m: f64,
 }
 
 /// `[vkf]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct VkfToml {
-    /// Initial scale factor, m/s per rpm.
+    /// Initial scale-factor estimate (true value: `rpm.k_mps_per_rpm`).
+    ///
+    /// Unit: m/s per rpm. Range: finite.
     pub sf0: f64,
-    /// Initial bias, m/s.
+    /// Initial bias estimate (true value: `rpm.b_mps`).
+    ///
+    /// Unit: m/s. Range: finite.
     pub b0: f64,
-    /// Initial speed sigma, m/s.
+    /// Initial forward-speed σ.
+    ///
+    /// Unit: m/s. Range: > 0.
     pub sigma_speed0_mps: f64,
-    /// Initial scale-factor sigma, m/s per rpm.
+    /// Initial scale-factor σ.
+    ///
+    /// Unit: m/s per rpm. Range: > 0.
     pub sigma_sf0: f64,
-    /// Initial bias sigma, m/s.
+    /// Initial bias σ.
+    ///
+    /// Unit: m/s. Range: > 0.
     pub sigma_b0_mps: f64,
-    /// Extra forward-speed process noise sigma per VKF step (one per DVL epoch), m/s.
+    /// Extra forward-speed process noise σ per VKF step (one step per DVL epoch).
+    ///
+    /// Unit: m/s. Range: ≥ 0.
     pub speed_process_sigma_mps: f64,
-    /// Scale-factor random-walk PSD, (m/s/rpm)^2/s.
+    /// Scale-factor random-walk PSD.
+    ///
+    /// Unit: (m/s/rpm)²/s. Range: ≥ 0.
     pub sf_rw_psd: f64,
-    /// Bias random-walk PSD, (m/s)^2/s.
+    /// Bias random-walk PSD.
+    ///
+    /// Unit: (m/s)²/s. Range: ≥ 0.
     pub bias_rw_psd: f64,
-    /// DVL forward-speed sigma assumed by the VKF, m/s.
+    /// σ of the DVL forward body speed assumed by the VKF's update.
+    ///
+    /// Unit: m/s. Range: > 0.
     pub dvl_sigma_mps: f64,
-    /// Sigma of the zero lateral / vertical body speed in RPM aiding, m/s.
+    /// σ of the lateral and vertical body speeds assumed zero when the switching box
+    /// uses RPM speed (eqs. 11-12).
+    ///
+    /// Unit: m/s. Range: > 0.
     pub lateral_sigma_mps: f64,
 }
 
 /// `[nav_filter]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct NavFilterToml {
-    /// Covariance propagation rate of the 9- and 15-state filters, Hz (divides the IMU rate).
+    /// Covariance propagation rate of the 9- and 15-state filters (the state runs at
+    /// the IMU rate).
+    ///
+    /// Unit: Hz. Range: divides `route.imu_rate_hz`, a whole multiple of `dvl.rate_hz`.
     pub covariance_rate_hz: f64,
-    /// White acceleration PSD of the 9-state filter, m^2/s^3.
+    /// White acceleration PSD of the 9-state filter.
+    ///
+    /// Unit: m²/s³. Range: > 0.
     pub accel_psd: f64,
-    /// Accelerometer-bias random-walk PSD of the 9-state filter, (m/s^2)^2/s.
+    /// Acceleration-bias random-walk PSD of the 9-state filter.
+    ///
+    /// Unit: (m/s²)²/s. Range: ≥ 0.
     pub accel_bias_rw_psd: f64,
-    /// Initial position sigma of the 9-state filters and the ESKF, m.
+    /// Initial position σ of the 9-state filters and the ESKF.
+    ///
+    /// Unit: m. Range: > 0.
     pub sigma0_pos_m: f64,
-    /// Initial velocity sigma of the 9-state filters and the ESKF, m/s.
+    /// Initial velocity σ of the 9-state filters and the ESKF.
+    ///
+    /// Unit: m/s. Range: > 0.
     pub sigma0_vel_mps: f64,
-    /// Initial accelerometer-bias sigma of the 9-state filter, m/s^2.
+    /// Initial acceleration-bias σ of the 9-state filter.
+    ///
+    /// Unit: m/s². Range: > 0.
     pub sigma0_accel_bias_mps2: f64,
-    /// Frame of the 9-state filter's acceleration bias: `"body"` or `"nav"`.
+    /// Frame of the 9-state filter's bias: `"body"` an accelerometer bias (enters as
+    /// `C_b^n b`), `"nav"` a bias of the navigation-frame acceleration input (dominated
+    /// by the uncorrected INS tilt).
+    ///
+    /// Range: `"body"` or `"nav"`.
     pub accel_bias_frame: String,
-    /// DVL velocity sigma assumed by the 9-state filters and the ESKF, m/s.
+    /// DVL velocity σ assumed by the 9-state filters and the ESKF.
+    ///
+    /// Unit: m/s. Range: > 0.
     pub dvl_sigma_mps: f64,
-    /// Gate probability of `INS-DVL-gated` (chi-square, 3 dof).
+    /// Gate probability of `INS-DVL-gated` (chi-square, 3 degrees of freedom).
+    ///
+    /// Range: (0, 1).
     pub gate_probability: f64,
 }
 
 /// `[eskf]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct EskfToml {
-    /// Initial attitude-error sigma, rad.
+    /// Initial attitude-error σ (its bias σ come from `[imu]`, its position and
+    /// velocity σ from `[nav_filter]`).
+    ///
+    /// Unit: rad. Range: > 0.
     pub sigma0_att_rad: f64,
 }
+
+crate::monte_carlo_scenario!(VkfScenario);
 
 /// The checked scenario.
 #[derive(Debug, Clone)]
@@ -285,6 +434,10 @@ pub struct Checked {
     pub gate: GateThreshold,
     pub gate_probability: f64,
     pub eskf_sigma0_att: f64,
+    /// `final_h_threshold_m`.
+    pub final_h_threshold: f64,
+    /// The scenario as written (for the report's description of the setup).
+    pub scenario: VkfScenario,
 }
 
 /// An integer ratio `a / b` (both rates in Hz), or an error naming `key`.
@@ -307,9 +460,8 @@ impl VkfScenario {
     ///
     /// # Errors
     /// [`SimError::Invalid`] naming the key.
-    pub fn check(&self, file: &str, runs_override: Option<usize>) -> Result<Checked, SimError> {
-        crate::scenario::require_experiment(file, &self.experiment, "vkf")?;
-        let runs = runs_override.unwrap_or(self.runs);
+    pub fn check(&self, file: &str) -> Result<Checked, SimError> {
+        let runs = self.runs;
         if runs < 2 {
             return Err(SimError::invalid(
                 file,
@@ -317,17 +469,16 @@ impl VkfScenario {
                 format!("needs at least 2 runs for a confidence interval, got {runs}"),
             ));
         }
-        let literal_bias_runs = match (runs_override, self.literal_bias_runs) {
-            (_, 0) => 0,
-            (Some(r), n) => n.min(r).max(2),
-            (None, 1) => {
+        let literal_bias_runs = match self.literal_bias_runs {
+            0 => 0,
+            1 => {
                 return Err(SimError::invalid(
                     file,
                     "literal_bias_runs",
                     "needs 0 (skip) or at least 2 runs",
                 ));
             }
-            (None, n) => n,
+            n => n.min(runs),
         };
         let r = &self.route;
         require_in_range(file, "route.lat_deg", r.lat_deg, -85.0, 85.0)?;
@@ -534,17 +685,14 @@ impl VkfScenario {
             gate,
             gate_probability: n.gate_probability,
             eskf_sigma0_att,
+            final_h_threshold: require_positive(
+                file,
+                "final_h_threshold_m",
+                self.final_h_threshold_m,
+            )?,
+            scenario: self.clone(),
         })
     }
-}
-
-/// Parses and checks a `vkf` scenario text without running it (`fathom check`);
-/// returns the resolved scenario re-serialized as TOML.
-///
-/// # Errors
-/// As the experiment's own loading: [`SimError::Toml`] or [`SimError::Invalid`].
-pub fn check_scenario_text(text: &str, file: &str) -> Result<String, SimError> {
-    crate::scenario::resolve_scenario_text(text, file, |s: &VkfScenario, f| s.check(f, None))
 }
 
 #[cfg(test)]
@@ -564,7 +712,7 @@ mod tests {
 
     #[test]
     fn preset_parses_and_checks() {
-        let c = parse(&text()).unwrap().check("vkf.toml", None).unwrap();
+        let c = parse(&text()).unwrap().check("vkf.toml").unwrap();
         assert!(c.runs >= 50);
         assert_eq!(c.n_steps, 162_000);
         assert_eq!(c.sensor_every, 20);
@@ -573,7 +721,9 @@ mod tests {
         // 0.1 deg/hr class, converted once.
         assert!((c.imu.gyro_bias - 0.1f64.to_radians() / 3600.0).abs() < 1e-15);
         // --runs caps the literal configuration.
-        let c = parse(&text()).unwrap().check("vkf.toml", Some(3)).unwrap();
+        let mut s = parse(&text()).unwrap();
+        s.runs = 3;
+        let c = s.check("vkf.toml").unwrap();
         assert_eq!((c.runs, c.literal_bias_runs), (3, 3));
     }
 
@@ -609,7 +759,7 @@ mod tests {
             assert_ne!(t, text(), "{from}");
             let err = parse(&t)
                 .unwrap()
-                .check("vkf.toml", None)
+                .check("vkf.toml")
                 .unwrap_err()
                 .to_string();
             assert!(err.contains(key), "{key}: {err}");

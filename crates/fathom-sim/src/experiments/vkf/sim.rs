@@ -101,7 +101,7 @@ pub fn build_shared(c: &Checked) -> Result<Shared, SimError> {
 }
 
 /// Run-0 series for the figures.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Detail {
     // 1 Hz
     pub t1: Vec<f64>,
@@ -129,7 +129,7 @@ pub struct Detail {
 }
 
 /// Per-run results.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct RunOutput {
     /// Horizontal position error per method at 1 Hz, m.
     pub err_h: [Vec<f64>; 5],

@@ -1,0 +1,459 @@
+//! Campaigns beyond one machine: a shard runs the run indices `K` of `M` of every batch
+//! and writes the runs' records and a manifest; `merge` checks that the manifests of a
+//! set of shards agree and cover every run once, reads the records back in run order
+//! and writes the same outputs as a single-process run.
+//!
+//! A shard's folder holds `manifest.json` and one record file per batch,
+//! `records-<batch>.jsonl` (one line per run: the run index, a tab, the record as
+//! JSON). Run `i` of a batch draws from its own stream `run_rng(base_seed, i)`, so its
+//! record does not depend on the shard layout, and the merged analysis folds the
+//! records in run order: the outputs are byte-identical to one process running all
+//! runs.
+
+use std::fs::File;
+use std::io::{BufRead, BufReader, BufWriter, Write};
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::{Deserialize, Serialize};
+use sha2::{Digest, Sha256};
+
+use super::{ExperimentResult, write_executed};
+use crate::SimError;
+use crate::experiment::{Batch, DynExperiment, FoundRecord, Job, RecordSink, RecordSource, Shard};
+
+/// Version of the shard folder layout.
+pub const FORMAT: u32 = 1;
+
+/// One batch of a shard: its label, its size, and the run indices the shard ran.
+#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+pub struct ShardBatch {
+    /// The batch label.
+    pub label: String,
+    /// Runs of the whole batch.
+    pub runs: usize,
+    /// First run index of this shard.
+    pub first: usize,
+    /// One past the last run index of this shard.
+    pub end: usize,
+}
+
+/// `manifest.json` of a shard.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Manifest {
+    /// [`FORMAT`].
+    pub format: u32,
+    /// fathom version that ran the shard.
+    pub fathom_version: String,
+    /// The experiment.
+    pub experiment: String,
+    /// The scenario as given on the command line (labels the report).
+    pub scenario_label: String,
+    /// SHA-256 of `resolved_scenario`.
+    pub scenario_sha256: String,
+    /// The resolved scenario (runs and seed folded in): what every shard must share.
+    pub resolved_scenario: String,
+    /// The base seed (`None`: a deterministic experiment).
+    pub base_seed: Option<u64>,
+    /// This shard.
+    pub shard: Shard,
+    /// Per batch, the run indices this shard ran.
+    pub batches: Vec<ShardBatch>,
+    /// Wall-clock time of the shard, s.
+    pub elapsed_s: f64,
+}
+
+fn sha256_hex(text: &str) -> String {
+    Sha256::digest(text.as_bytes())
+        .iter()
+        .map(|b| format!("{b:02x}"))
+        .collect()
+}
+
+fn records_file(dir: &Path, batch: usize) -> PathBuf {
+    dir.join(format!("records-{batch}.jsonl"))
+}
+
+/// Writes each batch's records into its own file.
+struct FileSink {
+    dir: PathBuf,
+    current: Option<(usize, BufWriter<File>)>,
+    batches: Vec<ShardBatch>,
+}
+
+impl FileSink {
+    fn flush(&mut self) -> Result<(), SimError> {
+        if let Some((b, mut w)) = self.current.take() {
+            let path = records_file(&self.dir, b);
+            w.flush().map_err(|e| SimError::io("write", &path, e))?;
+        }
+        Ok(())
+    }
+}
+
+impl RecordSink for FileSink {
+    fn begin_batch(
+        &mut self,
+        batch: usize,
+        info: &Batch,
+        range: Range<usize>,
+    ) -> Result<(), SimError> {
+        self.flush()?;
+        let path = records_file(&self.dir, batch);
+        let file = File::create(&path).map_err(|e| SimError::io("create", &path, e))?;
+        self.current = Some((batch, BufWriter::new(file)));
+        self.batches.push(ShardBatch {
+            label: info.label.clone(),
+            runs: info.runs,
+            first: range.start,
+            end: range.end,
+        });
+        Ok(())
+    }
+
+    fn record(&mut self, batch: usize, index: usize, json: &str) -> Result<(), SimError> {
+        let path = records_file(&self.dir, batch);
+        match &mut self.current {
+            Some((b, w)) if *b == batch => {
+                writeln!(w, "{index}\t{json}").map_err(|e| SimError::io("write", &path, e))
+            }
+            _ => Err(SimError::invalid_argument(
+                "shard records",
+                format!("record of batch {batch} outside its batch"),
+            )),
+        }
+    }
+}
+
+/// Runs shard `shard` of `exp` on `job` into the folder `dir` (created; it must not
+/// exist or be empty): the record files and `manifest.json`.
+///
+/// # Errors
+/// A folder that is not empty, the experiment's errors, I/O errors.
+pub fn run_shard(
+    exp: &dyn DynExperiment,
+    job: &Job<'_>,
+    shard: Shard,
+    dir: &Path,
+) -> Result<Manifest, SimError> {
+    if shard.count == 0 || shard.index >= shard.count {
+        return Err(SimError::invalid_argument(
+            "--shard",
+            format!("K/M needs 0 <= K < M, got {}/{}", shard.index, shard.count),
+        ));
+    }
+    if dir.exists()
+        && std::fs::read_dir(dir)
+            .map_err(|e| SimError::io("list directory", dir, e))?
+            .next()
+            .is_some()
+    {
+        return Err(SimError::invalid_argument(
+            "--out",
+            format!(
+                "`{}` is not empty; a shard writes into a new or empty folder",
+                dir.display()
+            ),
+        ));
+    }
+    std::fs::create_dir_all(dir).map_err(|e| SimError::io("create directory", dir, e))?;
+    let start = Instant::now();
+    let mut sink = FileSink {
+        dir: dir.to_path_buf(),
+        current: None,
+        batches: Vec::new(),
+    };
+    let plan = exp.execute_shard(job, shard, &mut sink)?;
+    sink.flush()?;
+    let manifest = Manifest {
+        format: FORMAT,
+        fathom_version: env!("CARGO_PKG_VERSION").to_string(),
+        experiment: exp.name().to_string(),
+        scenario_label: job.file.to_string(),
+        scenario_sha256: sha256_hex(&plan.resolved.toml),
+        resolved_scenario: plan.resolved.toml.clone(),
+        base_seed: plan.resolved.base_seed,
+        shard,
+        batches: sink.batches,
+        elapsed_s: start.elapsed().as_secs_f64(),
+    };
+    let json = serde_json::to_string_pretty(&manifest).map_err(|e| SimError::Json {
+        path: dir.join("manifest.json"),
+        source: e,
+    })?;
+    crate::output::write_text(dir.join("manifest.json"), &(json + "\n"))?;
+    Ok(manifest)
+}
+
+/// Reads a shard's manifest.
+///
+/// # Errors
+/// I/O or JSON errors naming the file.
+pub fn read_manifest(dir: &Path) -> Result<Manifest, SimError> {
+    let path = dir.join("manifest.json");
+    let text = std::fs::read_to_string(&path).map_err(|e| SimError::io("read", &path, e))?;
+    serde_json::from_str(&text).map_err(|e| SimError::Json { path, source: e })
+}
+
+/// The shards' manifests checked against each other: same experiment, scenario,
+/// version, seed and batches, and every run of every batch in exactly one shard.
+/// Returns, per batch, the shard folders in run order.
+fn check_manifests(shards: &[(PathBuf, Manifest)]) -> Result<Vec<Vec<PathBuf>>, SimError> {
+    let Some((first_dir, first)) = shards.first() else {
+        return Err(SimError::invalid_argument(
+            "merge",
+            "no shard folders given",
+        ));
+    };
+    let bad = |dir: &Path, what: String| {
+        SimError::invalid_argument(format!("shard `{}`", dir.display()), what)
+    };
+    for (dir, m) in shards {
+        if m.format != FORMAT {
+            return Err(bad(
+                dir,
+                format!("layout version {}, expected {FORMAT}", m.format),
+            ));
+        }
+        for (field, a, b) in [
+            ("experiment", &m.experiment, &first.experiment),
+            ("scenario", &m.scenario_sha256, &first.scenario_sha256),
+            ("fathom version", &m.fathom_version, &first.fathom_version),
+        ] {
+            if a != b {
+                return Err(bad(
+                    dir,
+                    format!(
+                        "{field} `{a}` differs from `{b}` of `{}`",
+                        first_dir.display()
+                    ),
+                ));
+            }
+        }
+        if m.base_seed != first.base_seed {
+            return Err(bad(dir, "base seed differs from the other shards'".into()));
+        }
+        let shape = |m: &Manifest| -> Vec<(String, usize)> {
+            m.batches
+                .iter()
+                .map(|b| (b.label.clone(), b.runs))
+                .collect()
+        };
+        if shape(m) != shape(first) {
+            return Err(bad(dir, "batches differ from the other shards'".into()));
+        }
+    }
+    let mut order = Vec::with_capacity(first.batches.len());
+    for (b, batch) in first.batches.iter().enumerate() {
+        let mut parts: Vec<(&PathBuf, &ShardBatch)> =
+            shards.iter().map(|(d, m)| (d, &m.batches[b])).collect();
+        parts.sort_by_key(|(_, p)| (p.first, p.end));
+        let mut next = 0;
+        let mut dirs = Vec::new();
+        for (dir, p) in parts {
+            if p.first == p.end {
+                continue;
+            }
+            if p.first < next {
+                return Err(bad(
+                    dir,
+                    format!(
+                        "runs {}..{} of batch `{}` are also in another shard (duplicated shard?)",
+                        p.first, p.end, batch.label
+                    ),
+                ));
+            }
+            if p.first > next {
+                return Err(SimError::invalid_argument(
+                    "merge",
+                    format!(
+                        "runs {next}..{} of batch `{}` are in no shard (missing shard?)",
+                        p.first, batch.label
+                    ),
+                ));
+            }
+            next = p.end;
+            dirs.push(dir.clone());
+        }
+        if next != batch.runs {
+            return Err(SimError::invalid_argument(
+                "merge",
+                format!(
+                    "runs {next}..{} of batch `{}` are in no shard (missing shard?)",
+                    batch.runs, batch.label
+                ),
+            ));
+        }
+        order.push(dirs);
+    }
+    Ok(order)
+}
+
+/// Reads the record files of each batch from its shards, in run order.
+struct FileSource {
+    order: Vec<Vec<PathBuf>>,
+    batch: usize,
+    part: usize,
+    reader: Option<(PathBuf, usize, std::io::Lines<BufReader<File>>)>,
+}
+
+impl RecordSource for FileSource {
+    fn next(&mut self, batch: usize) -> Result<Option<FoundRecord>, SimError> {
+        if batch != self.batch {
+            self.batch = batch;
+            self.part = 0;
+            self.reader = None;
+        }
+        loop {
+            if self.reader.is_none() {
+                let Some(dir) = self.order.get(batch).and_then(|d| d.get(self.part)) else {
+                    return Ok(None);
+                };
+                let path = records_file(dir, batch);
+                let file = File::open(&path).map_err(|e| SimError::io("read", &path, e))?;
+                self.reader = Some((path, 0, BufReader::new(file).lines()));
+            }
+            let Some((path, line_no, lines)) = &mut self.reader else {
+                return Ok(None);
+            };
+            match lines.next() {
+                None => {
+                    self.reader = None;
+                    self.part += 1;
+                }
+                Some(line) => {
+                    *line_no += 1;
+                    let line = line.map_err(|e| SimError::io("read", path.clone(), e))?;
+                    let origin = format!("{}:{line_no}", path.display());
+                    let (index, json) = line
+                        .split_once('\t')
+                        .and_then(|(i, j)| i.parse::<usize>().ok().map(|i| (i, j)))
+                        .ok_or_else(|| {
+                            SimError::invalid_argument(
+                                format!("record file {origin}"),
+                                "corrupted line (expected: run index, tab, JSON)",
+                            )
+                        })?;
+                    return Ok(Some(FoundRecord {
+                        index,
+                        json: json.to_string(),
+                        origin,
+                    }));
+                }
+            }
+        }
+    }
+}
+
+/// Merges the shard folders `dirs` into the outputs of one run written to `out_dir`
+/// (the same files as a single-process run: summary.json, report.md, figures, CSV).
+/// The outputs are first written to a temporary folder beside `out_dir` and renamed
+/// into place, so a failed merge leaves nothing half-written.
+///
+/// # Errors
+/// Manifests that disagree, a run missing or duplicated, a corrupted record file (each
+/// naming the shard or the file and line), the experiment's errors, I/O errors.
+pub fn merge(
+    registry: &[&'static dyn DynExperiment],
+    dirs: &[PathBuf],
+    threads: Option<usize>,
+    base_dir: &Path,
+    out_dir: &Path,
+) -> Result<(ExperimentResult, Manifest), SimError> {
+    let mut shards = Vec::with_capacity(dirs.len());
+    for d in dirs {
+        shards.push((d.clone(), read_manifest(d)?));
+    }
+    let order = check_manifests(&shards)?;
+    let first = shards[0].1.clone();
+    let exp = registry
+        .iter()
+        .copied()
+        .find(|e| e.name() == first.experiment)
+        .ok_or_else(|| {
+            SimError::invalid_argument(
+                "merge",
+                format!("experiment `{}` is not registered", first.experiment),
+            )
+        })?;
+    let job = Job {
+        text: &first.resolved_scenario,
+        file: &first.scenario_label,
+        runs: None,
+        seed: None,
+        threads,
+        progress: None,
+        env: crate::experiment::Environment {
+            base_dir: base_dir.to_path_buf(),
+        },
+    };
+    let start = Instant::now();
+    let mut source = FileSource {
+        order,
+        batch: 0,
+        part: 0,
+        reader: None,
+    };
+    let executed = exp.execute_from(&job, &mut source)?;
+    let elapsed = start.elapsed();
+    let mut result = super::write_atomically(out_dir, |tmp| {
+        write_executed(&executed, &first.scenario_label, tmp, elapsed)
+    })?;
+    result.out_dir = out_dir.to_path_buf();
+    for f in &mut result.figures {
+        if let Some(name) = f.file_name() {
+            *f = out_dir.join(name);
+        }
+    }
+    Ok((result, first))
+}
+
+/// The Slurm batch script of a campaign: a job array of `shards` tasks, each running
+/// `fathom run <scenario> --runs <runs> --shard $SLURM_ARRAY_TASK_ID/<shards>` into its
+/// own folder under `dir`, and a merge job that starts after every task succeeded.
+pub fn slurm_script(scenario: &str, runs: usize, shards: usize, dir: &str) -> String {
+    let last = shards.saturating_sub(1);
+    format!(
+        "#!/usr/bin/env bash\n\
+         # A fathom campaign on Slurm: {shards} shards of {runs} Monte Carlo runs, then the merge.\n\
+         # Submit with: bash {dir}/campaign.sh   (written by `fathom campaign slurm`)\n\
+         set -euo pipefail\n\
+         FATHOM=${{FATHOM:-fathom}}\n\
+         mkdir -p {dir}/logs\n\
+         array=$(sbatch --parsable --array=0-{last} --job-name=fathom-shard \\\n\
+         \x20   --output={dir}/logs/shard-%a.out \\\n\
+         \x20   --wrap=\"$FATHOM run {scenario} --runs {runs} --shard \\$SLURM_ARRAY_TASK_ID/{shards} --out {dir}/shard-\\$SLURM_ARRAY_TASK_ID\")\n\
+         merge=$(sbatch --parsable --dependency=afterok:$array --job-name=fathom-merge \\\n\
+         \x20   --output={dir}/logs/merge.out \\\n\
+         \x20   --wrap=\"$FATHOM merge {dir}/shard-* --out {dir}/merged\")\n\
+         echo \"submitted shards $array and merge $merge\"\n"
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn shards_cover_every_run_once() {
+        for (runs, count) in [(40, 4), (40, 3), (7, 3), (2, 5), (0, 2)] {
+            let mut next = 0;
+            for index in 0..count {
+                let r = Shard { index, count }.range(runs);
+                assert_eq!(r.start, next, "{runs} runs, {count} shards");
+                next = r.end;
+            }
+            assert_eq!(next, runs);
+        }
+    }
+
+    #[test]
+    fn slurm_script_names_the_array_and_the_dependent_merge() {
+        let s = slurm_script("b.toml", 40, 4, "out/c");
+        assert!(s.contains("--array=0-3"), "{s}");
+        assert!(s.contains("--shard \\$SLURM_ARRAY_TASK_ID/4"), "{s}");
+        assert!(s.contains("--dependency=afterok:$array"), "{s}");
+        assert!(s.contains("merge out/c/shard-* --out out/c/merged"), "{s}");
+    }
+}

@@ -1,0 +1,141 @@
+//! Plan-view paths and markers (equal aspect).
+
+use std::path::Path;
+
+use plotters::prelude::*;
+
+use super::*;
+use crate::error::SimError;
+
+/// Plan-view plot of paths plus point markers (e.g. beacons).
+///
+/// Points are `(horizontal, vertical)`. For a NED plan view pass `(east, north)`, i.e.
+/// `(pos.y, pos.x)`, so north is up, and label the axes accordingly.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanPlot {
+    /// Figure title.
+    pub title: String,
+    /// Horizontal axis label (e.g. `"east [m]"`).
+    pub x_label: String,
+    /// Vertical axis label (e.g. `"north [m]"`).
+    pub y_label: String,
+    /// Paths drawn as lines (truth, estimates, ...).
+    pub paths: Vec<Series>,
+    /// Point sets drawn as markers with a legend entry each (beacons, fixes, ...).
+    pub markers: Vec<Series>,
+    /// Keep one metre per pixel on both axes (default `true`).
+    pub equal_aspect: bool,
+    /// Size in pixels.
+    pub size: (u32, u32),
+}
+
+impl PlanPlot {
+    /// An empty plan-view plot (equal aspect, default size).
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+    ) -> Self {
+        PlanPlot {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            paths: Vec::new(),
+            markers: Vec::new(),
+            equal_aspect: true,
+            size: (800, 800),
+        }
+    }
+
+    /// Add a path.
+    pub fn with_path(mut self, s: Series) -> Self {
+        self.paths.push(s);
+        self
+    }
+
+    /// Add a marker set.
+    pub fn with_markers(mut self, s: Series) -> Self {
+        self.markers.push(s);
+        self
+    }
+
+    /// Draw the plot into an SVG file.
+    ///
+    /// # Errors
+    /// [`SimError::Plot`] if there is nothing to draw or data are empty / non-finite,
+    /// [`SimError::Io`] on write failure.
+    pub(crate) fn render_svg(&self, path: &Path) -> Result<String, SimError> {
+        if self.paths.is_empty() && self.markers.is_empty() {
+            return Err(plot_err(path, "no paths or markers to draw"));
+        }
+        if !self.paths.is_empty() {
+            check_series(path, "path", &self.paths)?;
+        }
+        if !self.markers.is_empty() {
+            check_series(path, "marker set", &self.markers)?;
+        }
+        let all = || {
+            self.paths
+                .iter()
+                .chain(&self.markers)
+                .flat_map(|s| s.points.iter().copied())
+        };
+        let (mut x0, mut x1) = padded(min_max(all().map(|p| p.0)).0, min_max(all().map(|p| p.0)).1);
+        let (mut y0, mut y1) = padded(min_max(all().map(|p| p.1)).0, min_max(all().map(|p| p.1)).1);
+        let (margin, title_h, xl, yl) = (12u32, 40u32, 45u32, 70u32);
+        if self.equal_aspect {
+            let w = f64::from(self.size.0.saturating_sub(2 * margin + yl).max(1));
+            let h = f64::from(self.size.1.saturating_sub(2 * margin + xl + title_h).max(1));
+            let scale = ((x1 - x0) / w).max((y1 - y0) / h);
+            let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
+            (x0, x1) = (cx - 0.5 * scale * w, cx + 0.5 * scale * w);
+            (y0, y1) = (cy - 0.5 * scale * h, cy + 0.5 * scale * h);
+        }
+        render(path, self.size, |root| {
+            let area = root.titled(&self.title, title_style(22)).map_err(de)?;
+            let mut chart = ChartBuilder::on(&area)
+                .margin(margin)
+                .x_label_area_size(xl)
+                .y_label_area_size(yl)
+                .build_cartesian_2d(x0..x1, y0..y1)
+                .map_err(de)?;
+            chart
+                .configure_mesh()
+                .x_desc(&self.x_label)
+                .y_desc(&self.y_label)
+                .light_line_style(RGBColor(235, 235, 235))
+                .axis_desc_style((FONT, 17))
+                .label_style((FONT, 15))
+                .draw()
+                .map_err(de)?;
+            for (k, s) in self.paths.iter().enumerate() {
+                let c = series_color(k);
+                chart
+                    .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
+                    .map_err(de)?
+                    .label(s.name.as_str())
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                    });
+            }
+            for (k, s) in self.markers.iter().enumerate() {
+                let c = series_color(self.paths.len() + k);
+                let style = c.filled();
+                chart
+                    .draw_series(s.points.iter().map(|&p| TriangleMarker::new(p, 8, style)))
+                    .map_err(de)?
+                    .label(s.name.as_str())
+                    .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 6, style));
+            }
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font((FONT, 14))
+                .position(SeriesLabelPosition::UpperRight)
+                .draw()
+                .map_err(de)?;
+            Ok(())
+        })
+    }
+}

@@ -1,0 +1,169 @@
+//! Sharded campaigns through the real binary: `fathom run --shard K/M` and `fathom
+//! merge` give byte-identical outputs to one process (4 even shards, 3 uneven ones,
+//! shards given in any order), and every broken merge (a missing or duplicated shard,
+//! shards of different scenarios or versions, a corrupted record file) is refused with
+//! exit code 2 and one line, leaving nothing in the output folder.
+
+use std::path::Path;
+
+use crate::support::{fathom, preset, scratch};
+
+/// The beacons preset cut to a 20 s mission.
+fn reduced_beacons() -> String {
+    preset("beacons.toml")
+        .replace("duration_s = 180.0", "duration_s = 20.0")
+        .replace("outlier_count = 276", "outlier_count = 30")
+}
+
+fn ok(dir: &Path, args: &[&str]) {
+    let ran = fathom(dir, args);
+    assert_eq!(ran.code, 0, "fathom {args:?}: {ran:?}");
+}
+
+/// Runs `shards` shards of `file` with `runs` runs into `prefix-K`.
+fn shards(dir: &Path, file: &str, runs: &str, count: usize, prefix: &str) -> Vec<String> {
+    (0..count)
+        .map(|k| {
+            let out = format!("{prefix}-{k}");
+            let shard = format!("{k}/{count}");
+            ok(
+                dir,
+                &[
+                    "run", file, "--runs", runs, "--shard", &shard, "--out", &out,
+                ],
+            );
+            out
+        })
+        .collect()
+}
+
+/// Every file the single-process run and the merge both write is byte-identical.
+fn same_outputs(dir: &Path, single: &str, merged: &str) {
+    let mut compared = 0;
+    for entry in std::fs::read_dir(dir.join(merged)).unwrap() {
+        let name = entry.unwrap().file_name();
+        let a = std::fs::read(dir.join(single).join(&name)).unwrap();
+        let b = std::fs::read(dir.join(merged).join(&name)).unwrap();
+        assert!(
+            a == b,
+            "{} differs between {single} and {merged}",
+            name.to_string_lossy()
+        );
+        compared += 1;
+    }
+    assert!(compared >= 5, "only {compared} files compared");
+}
+
+fn check_experiment(name: &str, text: &str) {
+    let dir = scratch(&format!("campaign-{name}"));
+    let file = format!("{name}.toml");
+    std::fs::write(dir.join(&file), text).unwrap();
+    ok(&dir, &["run", &file, "--runs", "40", "--out", "single"]);
+    let four = shards(&dir, &file, "40", 4, "four");
+    let mut args = vec!["merge"];
+    args.extend(four.iter().rev().map(String::as_str));
+    args.extend(["--out", "merged4"]);
+    ok(&dir, &args);
+    same_outputs(&dir, "single", "merged4");
+    let three = shards(&dir, &file, "40", 3, "three");
+    ok(
+        &dir,
+        &["merge", &three[1], &three[2], &three[0], "--out", "merged3"],
+    );
+    same_outputs(&dir, "single", "merged3");
+}
+
+#[test]
+fn beacons_shards_merge_to_the_bytes_of_one_process() {
+    check_experiment("beacons", &reduced_beacons());
+}
+
+#[test]
+fn vkf_shards_merge_to_the_bytes_of_one_process() {
+    // The 400 s mission of the vkf end-to-end test: one interval without bottom lock.
+    let mut out = String::new();
+    let mut skip = false;
+    for line in preset("vkf.toml").lines() {
+        if line.starts_with("knots = ") {
+            out.push_str(
+                "knots = [[0.0, 110.0], [140.0, 110.0], [160.0, 190.0], [240.0, 190.0], \
+                 [260.0, 110.0], [400.0, 110.0]]\n",
+            );
+            skip = !line.trim_end().ends_with("]]");
+            continue;
+        }
+        if skip {
+            skip = !line.trim_end().ends_with("]]");
+            continue;
+        }
+        out.push_str(&line.replace("duration_s = 1620.0", "duration_s = 400.0"));
+        out.push('\n');
+    }
+    check_experiment("vkf", &out);
+}
+
+#[test]
+fn broken_merges_are_refused_with_one_line_and_nothing_written() {
+    let dir = scratch("campaign-broken");
+    std::fs::write(dir.join("b.toml"), reduced_beacons()).unwrap();
+    let other = reduced_beacons().replace("corr_gap_s = 1.0", "corr_gap_s = 2.0");
+    std::fs::write(dir.join("other.toml"), other).unwrap();
+    let s = shards(&dir, "b.toml", "8", 2, "s");
+    let o = shards(&dir, "other.toml", "8", 2, "o");
+    // A copy of shard 1 claiming another fathom version.
+    std::fs::create_dir_all(dir.join("v")).unwrap();
+    for f in [
+        "manifest.json",
+        "records-0.jsonl",
+        "records-1.jsonl",
+        "records-2.jsonl",
+        "records-3.jsonl",
+    ] {
+        std::fs::copy(dir.join(&s[1]).join(f), dir.join("v").join(f)).unwrap();
+    }
+    let m = std::fs::read_to_string(dir.join("v/manifest.json")).unwrap();
+    std::fs::write(
+        dir.join("v/manifest.json"),
+        m.replacen("\"fathom_version\": \"", "\"fathom_version\": \"9", 1),
+    )
+    .unwrap();
+    // A copy of shard 0 with a corrupted record line.
+    std::fs::create_dir_all(dir.join("c")).unwrap();
+    for f in [
+        "manifest.json",
+        "records-0.jsonl",
+        "records-1.jsonl",
+        "records-2.jsonl",
+        "records-3.jsonl",
+    ] {
+        std::fs::copy(dir.join(&s[0]).join(f), dir.join("c").join(f)).unwrap();
+    }
+    let r = std::fs::read_to_string(dir.join("c/records-0.jsonl")).unwrap();
+    let first = r.lines().next().unwrap();
+    let cut = &first[..first.len() / 2];
+    std::fs::write(dir.join("c/records-0.jsonl"), r.replacen(first, cut, 1)).unwrap();
+    for (args, needle) in [
+        (vec![s[0].as_str()], "missing shard"),
+        (
+            vec![s[0].as_str(), s[1].as_str(), s[1].as_str()],
+            "duplicated shard",
+        ),
+        (vec![s[0].as_str(), o[1].as_str()], "scenario"),
+        (vec![s[0].as_str(), "v"], "fathom version"),
+        (vec!["c", s[1].as_str()], "records-0.jsonl:1"),
+    ] {
+        let mut all = vec!["merge"];
+        all.extend(args.iter().copied());
+        all.extend(["--out", "bad"]);
+        let ran = fathom(&dir, &all);
+        assert_eq!(ran.code, 2, "{all:?}: {ran:?}");
+        assert_eq!(
+            ran.stderr.trim().lines().count(),
+            1,
+            "{all:?}: {}",
+            ran.stderr
+        );
+        assert!(ran.stderr.contains(needle), "{all:?}: {}", ran.stderr);
+        assert!(!dir.join("bad").exists(), "{all:?} left an output folder");
+    }
+}
