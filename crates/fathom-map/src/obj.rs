@@ -3,8 +3,9 @@
 //!
 //! The text is scanned once before `tobj` parses it, to give errors a line number:
 //! a `usemtl` name the material table does not map, a face with no material while
-//! there is no default material, and a vertex that is not finite or lies beyond
-//! [`MAX_COORD`](crate::mesh::MAX_COORD) after conversion. When `tobj` itself rejects
+//! there is no default material, a vertex that is not finite or lies beyond
+//! [`crate::mesh::MAX_COORD`] after conversion, and a face index that names
+//! no element defined before it (which `tobj` does not check and can overflow on). When `tobj` itself rejects
 //! the file (a malformed number, a face index out of range, ...), the line is found by
 //! bisection: the shortest prefix of the file that `tobj` rejects ends at the culprit
 //! (only on the error path). `tobj` looks `usemtl` names up among the materials of a
@@ -178,10 +179,17 @@ fn scan(text: &str, settings: &ImportSettings) -> Result<Scan, MapError> {
         ignored: 0,
     };
     let mut current: Option<Material> = None;
+    // elements defined so far: positions, texture coordinates, normals
+    let mut counts = [0usize; 3];
     for (line, l) in lines(text) {
         let mut words = l.split_whitespace();
         match words.next() {
-            Some("v") => check_vertex(line, words, settings)?,
+            Some("v") => {
+                check_vertex(line, words, settings)?;
+                counts[0] += 1;
+            }
+            Some("vt") => counts[1] += 1,
+            Some("vn") => counts[2] += 1,
             Some("usemtl") => {
                 let name = l.split_once(' ').map_or("", |x| x.1).trim();
                 if name.is_empty() {
@@ -199,7 +207,7 @@ fn scan(text: &str, settings: &ImportSettings) -> Result<Scan, MapError> {
                 }
             }
             Some("f") => {
-                let corners = words.count();
+                let corners = check_face_indices(line, words.clone(), &counts)?;
                 if corners < 3 {
                     s.ignored += 1;
                     continue;
@@ -212,11 +220,48 @@ fn scan(text: &str, settings: &ImportSettings) -> Result<Scan, MapError> {
                     return Err(MapError::MissingMaterial { line });
                 }
             }
-            Some("p") | Some("l") => s.ignored += 1,
+            Some("l") => {
+                check_face_indices(line, words, &counts)?;
+                s.ignored += 1;
+            }
+            Some("p") => s.ignored += 1,
             _ => {}
         }
     }
     Ok(s)
+}
+
+/// The `v/vt/vn` indices of a face (or line) element: each present index must name an
+/// element defined before it (`1..=n`, or `-n..=-1` counting back), else an error.
+/// `tobj` resolves these indices without that check and can overflow on them (found
+/// by fuzzing: `fuzz/regressions/map_obj/`). Returns the number of corners; tokens
+/// that are not integers are left to `tobj`.
+fn check_face_indices<'a>(
+    line: usize,
+    words: impl Iterator<Item = &'a str>,
+    counts: &[usize; 3],
+) -> Result<usize, MapError> {
+    const KIND: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+    let mut corners = 0;
+    for word in words {
+        corners += 1;
+        for (k, part) in word.split('/').enumerate().take(3) {
+            let Ok(x) = part.parse::<i64>() else {
+                continue;
+            };
+            let n = counts[k] as i64;
+            if !((1..=n).contains(&x) || (-n..=-1).contains(&x)) {
+                return Err(MapError::ObjLine {
+                    line,
+                    reason: format!(
+                        "{} index {x} out of range ({n} defined before this line)",
+                        KIND[k]
+                    ),
+                });
+            }
+        }
+    }
+    Ok(corners)
 }
 
 /// A `v x y z [w]` line whose numbers parse must give a finite NED point within
@@ -333,7 +378,23 @@ f 1 2 3 4
         let s = ned();
         assert_eq!(
             err("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 1\nf 1 2 9\n", &s),
-            "OBJ line 5: face vertex index out of bounds"
+            "OBJ line 5: vertex index 9 out of range (4 defined before this line)"
+        );
+        // relative and texture indices that reach outside (tobj would overflow)
+        assert_eq!(
+            err("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/-8 2/1 3/1\n", &s),
+            "OBJ line 5: texture coordinate index -8 out of range (1 defined before this line)"
+        );
+        assert_eq!(
+            err(
+                "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1//9223372036854775807 2 3\n",
+                &s
+            ),
+            "OBJ line 4: normal index 9223372036854775807 out of range (0 defined before this line)"
+        );
+        assert_eq!(
+            err("v 0 0 0\nv 1 0 0\nl 1 0\n", &s),
+            "OBJ line 3: vertex index 0 out of range (2 defined before this line)"
         );
         assert_eq!(
             err("v 0 0 0\nv 1 x 0\nv 0 1 0\nf 1 2 3\n", &s),

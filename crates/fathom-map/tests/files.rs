@@ -123,7 +123,7 @@ fn broken_files_name_the_file_and_the_line_or_face() {
     assert_eq!(
         err(&far),
         format!(
-            "`house.obj`: OBJ line {}: face vertex index out of bounds",
+            "`house.obj`: OBJ line {}: vertex index 99 out of range (14 defined before this line)",
             line_of(HOUSE, "f 9 9 10")
         )
     );
