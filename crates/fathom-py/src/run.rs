@@ -312,7 +312,7 @@ pub fn run(
                 .analysis
                 .files()
                 .iter()
-                .map(|f| (f.name.clone(), f.content.clone()))
+                .map(|f| (f.name.clone(), f.content.to_text()))
                 .collect();
             build_result(py, &executed.summary, &files, executed.resolved.toml, None)
         }

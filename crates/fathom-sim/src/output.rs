@@ -254,6 +254,27 @@ pub fn write_text(path: impl AsRef<Path>, text: &str) -> Result<(), SimError> {
     std::fs::write(path, text).map_err(|e| SimError::io("write", path, e))
 }
 
+/// Creates `path` (and its parent folders) and streams its content through a
+/// buffered writer.
+///
+/// # Errors
+/// [`SimError::Io`] naming the path.
+pub fn write_with(
+    path: impl AsRef<Path>,
+    body: impl FnOnce(&mut dyn std::io::Write) -> std::io::Result<()>,
+) -> Result<(), SimError> {
+    use std::io::Write as _;
+    let path = path.as_ref();
+    if let Some(parent) = path.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent).map_err(|e| SimError::io("create directory", parent, e))?;
+    }
+    let file = std::fs::File::create(path).map_err(|e| SimError::io("write", path, e))?;
+    let mut w = std::io::BufWriter::new(file);
+    body(&mut w)
+        .and_then(|()| w.flush())
+        .map_err(|e| SimError::io("write", path, e))
+}
+
 /// Format a float for CSV: shortest round-trip representation (`{}`), deterministic.
 pub fn csv_float(x: f64) -> String {
     format!("{x}")
@@ -283,16 +304,16 @@ fn check_headers(path: &Path, headers: &[&str]) -> Result<(), SimError> {
     Ok(())
 }
 
-/// Build CSV text from equal-length numeric columns (e.g. `time_s`, `err_3d_m`).
+/// Checks CSV headers and equal-length numeric columns (labelled with `path`).
 ///
 /// # Errors
-/// [`SimError::Output`] (labelled with `path`) if headers are bad or the number of
-/// columns or their lengths differ.
-pub fn csv_columns_text(
+/// [`SimError::Output`] if headers are bad or the number of columns or their
+/// lengths differ.
+pub fn check_csv_columns(
     path: &Path,
     headers: &[&str],
     columns: &[&[f64]],
-) -> Result<String, SimError> {
+) -> Result<(), SimError> {
     check_headers(path, headers)?;
     if columns.len() != headers.len() {
         return Err(SimError::Output {
@@ -313,18 +334,56 @@ pub fn csv_columns_text(
             });
         }
     }
-    let mut out = headers.join(",");
-    out.push('\n');
+    Ok(())
+}
+
+/// Streams checked columns as CSV text into `w` (the bytes of [`csv_columns_text`]),
+/// one line at a time, so a large table is never held as text.
+///
+/// # Errors
+/// The writer's I/O error.
+pub fn stream_csv_columns<S: AsRef<str>>(
+    w: &mut (impl std::io::Write + ?Sized),
+    headers: &[S],
+    columns: &[impl AsRef<[f64]>],
+) -> std::io::Result<()> {
+    for (j, h) in headers.iter().enumerate() {
+        if j > 0 {
+            w.write_all(b",")?;
+        }
+        w.write_all(h.as_ref().as_bytes())?;
+    }
+    w.write_all(b"\n")?;
+    let n = columns.first().map_or(0, |c| c.as_ref().len());
     for i in 0..n {
         for (j, c) in columns.iter().enumerate() {
             if j > 0 {
-                out.push(',');
+                w.write_all(b",")?;
             }
-            out.push_str(&csv_float(c[i]));
+            write!(w, "{}", c.as_ref()[i])?;
         }
-        out.push('\n');
+        w.write_all(b"\n")?;
     }
-    Ok(out)
+    Ok(())
+}
+
+/// Build CSV text from equal-length numeric columns (e.g. `time_s`, `err_3d_m`).
+///
+/// # Errors
+/// [`SimError::Output`] (labelled with `path`) if headers are bad or the number of
+/// columns or their lengths differ.
+pub fn csv_columns_text(
+    path: &Path,
+    headers: &[&str],
+    columns: &[&[f64]],
+) -> Result<String, SimError> {
+    check_csv_columns(path, headers, columns)?;
+    let mut out = Vec::new();
+    stream_csv_columns(&mut out, headers, columns).map_err(|e| SimError::io("format", path, e))?;
+    String::from_utf8(out).map_err(|e| SimError::Output {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })
 }
 
 /// Write equal-length numeric columns as CSV (see [`csv_columns_text`]).

@@ -22,7 +22,7 @@ use std::time::{Duration, Instant};
 
 use crate::SimError;
 use crate::experiment::{DynExperiment, Executed, Job};
-use crate::output::{Summary, write_summary_json, write_text};
+use crate::output::{Summary, write_summary_json, write_text, write_with};
 
 pub use paper::{PaperOptions, PaperResult, run_paper, run_paper_to};
 pub use report::{TABLE_DECIMALS, console_section};
@@ -86,7 +86,7 @@ pub(crate) fn write_executed(
     let mut figures = Vec::new();
     for f in executed.analysis.files() {
         let path = out_dir.join(&f.name);
-        write_text(&path, &f.content)?;
+        write_with(&path, |w| f.content.write_to(w))?;
         if f.name.ends_with(".svg") {
             figures.push(path);
         }

@@ -4,16 +4,57 @@
 use std::path::Path;
 
 use crate::SimError;
-use crate::output::{Claim, CsvCell, Row, csv_columns_text, csv_records_text};
+use crate::output::{Claim, CsvCell, Row, check_csv_columns, csv_records_text, stream_csv_columns};
 use crate::plot::Figure;
 
 /// One output file, held in memory until the driver writes it.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct OutputFile {
     /// File name inside the output directory (no directory part).
     pub name: String,
     /// File content.
-    pub content: String,
+    pub content: FileContent,
+}
+
+/// What an output file holds until it is written.
+#[derive(Debug, Clone, PartialEq)]
+pub enum FileContent {
+    /// Finished text (figures, small tables).
+    Text(String),
+    /// A numeric table, formatted only while it is streamed to disk: a per-run
+    /// table of a large campaign is held as numbers (8 bytes a value), not as text.
+    Columns {
+        /// Column headers.
+        headers: Vec<String>,
+        /// Equal-length columns (checked when added).
+        columns: Vec<Vec<f64>>,
+    },
+}
+
+impl FileContent {
+    /// Streams the content into `w`.
+    ///
+    /// # Errors
+    /// The writer's I/O error.
+    pub fn write_to(&self, w: &mut dyn std::io::Write) -> std::io::Result<()> {
+        match self {
+            Self::Text(text) => w.write_all(text.as_bytes()),
+            Self::Columns { headers, columns } => stream_csv_columns(w, headers, columns),
+        }
+    }
+
+    /// The content as text.
+    pub fn to_text(&self) -> String {
+        match self {
+            Self::Text(text) => text.clone(),
+            Self::Columns { .. } => {
+                let mut out = Vec::new();
+                // Writing into a Vec cannot fail and CSV of numbers is ASCII.
+                let _ = self.write_to(&mut out);
+                String::from_utf8_lossy(&out).into_owned()
+            }
+        }
+    }
 }
 
 /// The file names the driver writes itself.
@@ -88,7 +129,7 @@ impl Analysis {
     /// A bad name, or the figure's own errors (empty or non-finite data, ...).
     pub fn figure(&mut self, name: &str, figure: &impl Figure) -> Result<(), SimError> {
         let content = figure.to_svg(Path::new(name))?;
-        self.file(name, "svg", content)
+        self.file(name, "svg", FileContent::Text(content))
     }
 
     /// Adds the CSV file `name` from equal-length numeric columns
@@ -102,8 +143,30 @@ impl Analysis {
         headers: &[&str],
         columns: &[&[f64]],
     ) -> Result<(), SimError> {
-        let content = csv_columns_text(Path::new(name), headers, columns)?;
-        self.file(name, "csv", content)
+        self.csv_owned_columns(name, headers, columns.iter().map(|c| c.to_vec()).collect())
+    }
+
+    /// As [`Analysis::csv_columns`], taking the columns by value (no copy of a
+    /// large per-run table).
+    ///
+    /// # Errors
+    /// A bad name, bad headers or columns of different lengths.
+    pub fn csv_owned_columns(
+        &mut self,
+        name: &str,
+        headers: &[&str],
+        columns: Vec<Vec<f64>>,
+    ) -> Result<(), SimError> {
+        let slices: Vec<&[f64]> = columns.iter().map(Vec::as_slice).collect();
+        check_csv_columns(Path::new(name), headers, &slices)?;
+        self.file(
+            name,
+            "csv",
+            FileContent::Columns {
+                headers: headers.iter().map(|h| (*h).to_owned()).collect(),
+                columns,
+            },
+        )
     }
 
     /// Adds the CSV file `name` from mixed text/number records
@@ -118,7 +181,7 @@ impl Analysis {
         records: &[Vec<CsvCell>],
     ) -> Result<(), SimError> {
         let content = csv_records_text(Path::new(name), headers, records)?;
-        self.file(name, "csv", content)
+        self.file(name, "csv", FileContent::Text(content))
     }
 
     /// The files added so far.
@@ -126,7 +189,7 @@ impl Analysis {
         &self.files
     }
 
-    fn file(&mut self, name: &str, extension: &str, content: String) -> Result<(), SimError> {
+    fn file(&mut self, name: &str, extension: &str, content: FileContent) -> Result<(), SimError> {
         let bad = |reason: String| SimError::Output {
             path: name.into(),
             reason,
@@ -171,6 +234,6 @@ mod tests {
         assert!(a.csv_columns("b.svg", &["x_m"], &[&[1.0]]).is_err());
         assert!(a.csv_columns("summary.json", &["x_m"], &[&[1.0]]).is_err());
         assert_eq!(a.files().len(), 1);
-        assert_eq!(a.files()[0].content, "x_m\n1\n");
+        assert_eq!(a.files()[0].content.to_text(), "x_m\n1\n");
     }
 }

@@ -42,7 +42,7 @@ use serde::de::DeserializeOwned;
 
 use crate::SimError;
 
-pub use analysis::{Analysis, OutputFile};
+pub use analysis::{Analysis, FileContent, OutputFile};
 pub use dynamic::{
     DynExperiment, Executed, FoundRecord, Job, Plan, RecordSink, RecordSource, Resolved, Shard,
     SingleRunFn,

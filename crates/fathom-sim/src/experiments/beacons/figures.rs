@@ -81,8 +81,7 @@ pub(super) fn write(
         }
     }
     let h: Vec<&str> = headers.iter().map(String::as_str).collect();
-    let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
-    out.csv_columns("per_run_stats.csv", &h, &c)?;
+    out.csv_owned_columns("per_run_stats.csv", &h, cols)?;
 
     // Single-run figures: recompute the figure run (deterministic).
     let mut rng = run_rng(checked.base_seed, checked.figure_run);

@@ -123,42 +123,41 @@ pub(super) fn fold_run(record: Vec<Vec<SchemeStats>>, sums: &mut BatchSums) -> V
             .map(|c| vec![SchemeSums::default(); c.len()])
             .collect();
     }
-    record
-        .into_iter()
-        .zip(&mut sums.cases)
-        .map(|(case, case_sums)| {
-            case.into_iter()
-                .zip(case_sums.iter_mut())
-                .map(|(s, acc)| {
-                    if acc.runs == 0 {
-                        acc.errors = s.errors.clone();
-                        acc.counts = s.counts.clone();
-                    } else {
-                        for (a, e) in acc.errors.iter_mut().zip(&s.errors) {
-                            *a += e;
-                        }
-                        for (a, c) in acc.counts.iter_mut().zip(&s.counts) {
-                            *a = ChannelCounts::total(&[*a, *c]);
-                        }
-                    }
-                    acc.runs += 1;
-                    acc.untested += s.untested as f64;
-                    acc.injected += s.injected as f64;
-                    acc.clean_tested += s.clean_tested as f64;
-                    acc.passed += s.injected - s.rejected - s.untested;
-                    acc.pooled_rejected += s.rejected as u64;
-                    acc.pooled_injected += s.injected as u64;
-                    KeptStats {
-                        stats: s.stats,
-                        nees_mean: s.nees_mean,
-                        recall: s.recall,
-                        rejected: s.rejected,
-                        false_rejections: s.false_rejections,
-                    }
-                })
-                .collect()
-        })
-        .collect()
+    // Built with exact capacities, not collected in place: an in-place collect would
+    // keep the record's larger allocation alive for every kept run.
+    let mut kept = Vec::with_capacity(record.len());
+    for (case, case_sums) in record.into_iter().zip(&mut sums.cases) {
+        let mut kept_case = Vec::with_capacity(case.len());
+        kept_case.extend(case.into_iter().zip(case_sums.iter_mut()).map(|(s, acc)| {
+            if acc.runs == 0 {
+                acc.errors = s.errors.clone();
+                acc.counts = s.counts.clone();
+            } else {
+                for (a, e) in acc.errors.iter_mut().zip(&s.errors) {
+                    *a += e;
+                }
+                for (a, c) in acc.counts.iter_mut().zip(&s.counts) {
+                    *a = ChannelCounts::total(&[*a, *c]);
+                }
+            }
+            acc.runs += 1;
+            acc.untested += s.untested as f64;
+            acc.injected += s.injected as f64;
+            acc.clean_tested += s.clean_tested as f64;
+            acc.passed += s.injected - s.rejected - s.untested;
+            acc.pooled_rejected += s.rejected as u64;
+            acc.pooled_injected += s.injected as u64;
+            KeptStats {
+                stats: s.stats,
+                nees_mean: s.nees_mean,
+                recall: s.recall,
+                rejected: s.rejected,
+                false_rejections: s.false_rejections,
+            }
+        }));
+        kept.push(kept_case);
+    }
+    kept
 }
 
 fn stats_of(detail: RunDetail) -> Result<Vec<Vec<SchemeStats>>, SimError> {
