@@ -61,6 +61,16 @@ pub struct SchemeStats {
     pub(super) injected: usize,
     pub(super) counts: Vec<ChannelCounts>,
     pub(super) errors: Vec<f64>,
+    /// The RTS-smoothed run (`smooth = true`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) smoothed: Option<SmoothedStats>,
+}
+
+/// A smoothed run's error statistics and time-averaged NEES.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SmoothedStats {
+    pub(super) stats: RunStats,
+    pub(super) nees_mean: f64,
 }
 
 pub(super) fn one_run(
@@ -89,6 +99,7 @@ pub struct KeptStats {
     pub(super) recall: f64,
     pub(super) rejected: usize,
     pub(super) false_rejections: usize,
+    pub(super) smoothed: Option<SmoothedStats>,
 }
 
 /// Sums over a batch's runs of one scheme on one case, in run order.
@@ -154,6 +165,7 @@ pub(super) fn fold_run(record: Vec<Vec<SchemeStats>>, sums: &mut BatchSums) -> V
                         recall: s.recall,
                         rejected: s.rejected,
                         false_rejections: s.false_rejections,
+                        smoothed: s.smoothed,
                     }
                 })
                 .collect()
@@ -171,6 +183,17 @@ fn stats_of(detail: RunDetail) -> Result<Vec<Vec<SchemeStats>>, SimError> {
                     let stats = RunStats::of(&r.errors_3d)
                         .map_err(|e| SimError::model("run statistics", e))?;
                     let nees_mean = r.nees.iter().sum::<f64>() / r.nees.len().max(1) as f64;
+                    let smoothed = r
+                        .smoothed
+                        .as_ref()
+                        .map(|s| -> Result<SmoothedStats, SimError> {
+                            Ok(SmoothedStats {
+                                stats: RunStats::of(&s.errors_3d)
+                                    .map_err(|e| SimError::model("smoothed run statistics", e))?,
+                                nees_mean: s.nees.iter().sum::<f64>() / s.nees.len().max(1) as f64,
+                            })
+                        })
+                        .transpose()?;
                     Ok(SchemeStats {
                         stats,
                         nees_mean,
@@ -191,6 +214,7 @@ fn stats_of(detail: RunDetail) -> Result<Vec<Vec<SchemeStats>>, SimError> {
                         injected: r.outliers_injected,
                         counts: r.counts,
                         errors: r.errors_3d,
+                        smoothed,
                     })
                 })
                 .collect()
