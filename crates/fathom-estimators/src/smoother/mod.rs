@@ -63,7 +63,7 @@
 //! | 15 | 5,648 B | 1,928 B | 15-state error-state INS |
 //!
 //! The backward step costs one `N x N` Cholesky factorization and a few `N^3`
-//! products (`docs/performance.md` has the measured times on the longest runs).
+//! products (`docs/performance.md` has the step counts and memory of the longest runs).
 //!
 //! # Fixed lag
 //! [`FixedLagSmoother`] keeps the steps of the last `L` seconds and runs the same
