@@ -7,7 +7,7 @@ use fathom_sim::driver::run_paper_to;
 use fathom_sim::experiments::registry;
 use fathom_sim::{PaperOptions, output::read_summary_json};
 
-fn short_scenario() -> String {
+pub(crate) fn short_scenario() -> String {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let text = std::fs::read_to_string(root.join("scenarios/vkf.toml")).unwrap();
     let mut out = String::new();

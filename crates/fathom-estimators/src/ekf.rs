@@ -26,6 +26,7 @@
 use crate::{
     EstimatorError, GateThreshold, KalmanFilter, ScalarMeasurement, ScalarOutcome,
     error::check_finite_entries,
+    smoother::{ForwardPass, ModelSpace, SmoothedStep},
 };
 use fathom_core::{Gaussian, Time, gaussian::SYMMETRY_TOLERANCE};
 use nalgebra::{DMatrix, RowSVector, SMatrix, SVector};
@@ -124,11 +125,16 @@ pub struct GroupItem<'a, S> {
 /// time is an error naming the quantity, the item index and the filter time; a
 /// covariance that stops being positive definite is an error with the time; the
 /// filter is unchanged on every error.
+///
+/// Smoothing: after [`Ekf::start_recording`] every prediction, group update and
+/// covariance inflation is recorded ([`crate::smoother`]), and [`Ekf::smooth`] runs
+/// the RTS backward pass over the record.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ekf<const N: usize, M: MotionModel<N>> {
     kf: KalmanFilter<N>,
     model: M,
     input: M::Input,
+    recording: Option<ForwardPass<N>>,
 }
 
 impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
@@ -146,7 +152,47 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
             kf: KalmanFilter::new(prior, time)?,
             model,
             input,
+            recording: None,
         })
+    }
+
+    /// Starts recording the forward pass for smoothing from the current estimate
+    /// (replacing an earlier record). Recording does not change any estimate.
+    pub fn start_recording(&mut self) {
+        self.recording = Some(ForwardPass::from_filter(&self.kf));
+    }
+
+    /// The forward pass recorded so far (`None` unless [`Ekf::start_recording`] was
+    /// called); its [`ForwardPass::last_index`] is the step of the current estimate.
+    pub fn forward_pass(&self) -> Option<&ForwardPass<N>> {
+        self.recording.as_ref()
+    }
+
+    /// Takes the recorded forward pass out (recording stops).
+    pub fn take_forward_pass(&mut self) -> Option<ForwardPass<N>> {
+        self.recording.take()
+    }
+
+    /// The fixed-interval RTS smoother over the recorded pass, in the model's state
+    /// space ([`ModelSpace`]: its `difference` and `normalize`).
+    ///
+    /// # Errors
+    /// [`EstimatorError::Smoother`] when recording is off, else as
+    /// [`ForwardPass::smooth_with`].
+    pub fn smooth(&self) -> Result<Vec<SmoothedStep<N>>, EstimatorError> {
+        match &self.recording {
+            Some(pass) => pass.smooth_with(&ModelSpace(&self.model)),
+            None => Err(EstimatorError::Smoother {
+                what: "EKF smoother: the forward pass was not recorded (start_recording)".into(),
+                time: self.kf.time(),
+            }),
+        }
+    }
+
+    fn record_update(&mut self) {
+        if let Some(pass) = &mut self.recording {
+            pass.record_update(&self.kf);
+        }
     }
 
     /// The underlying Kalman filter (state, covariance, time).
@@ -196,7 +242,12 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
         let t = self.kf.time();
         let estimate = Gaussian::new(*self.kf.state(), self.kf.covariance() * factor)
             .map_err(|e| EstimatorError::from_core_at(e, t))?;
-        self.kf.set_estimate(estimate)
+        self.kf.set_estimate(estimate)?;
+        // Extra process noise: a step with F = I at the same time (smoother docs).
+        if let Some(pass) = &mut self.recording {
+            pass.record_prediction(&SMatrix::identity(), &self.kf);
+        }
+        Ok(())
     }
 
     /// Merges a received input sample (it drives the predictions from now on).
@@ -260,7 +311,11 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
         let mut x = prop.x_pred;
         self.model.normalize(&mut x);
         self.kf
-            .predict_nonlinear(&x, &prop.f_jacobian, &prop.q, time)
+            .predict_nonlinear(&x, &prop.f_jacobian, &prop.q, time)?;
+        if let Some(pass) = &mut self.recording {
+            pass.record_prediction(&prop.f_jacobian, &self.kf);
+        }
+        Ok(())
     }
 
     /// Linearizes item `i` at `x0`: `(h_i(x0), H_i)`.
@@ -317,6 +372,7 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
             }
         }
         self.renormalize(backup)?;
+        self.record_update();
         Ok(outcomes)
     }
 
@@ -423,6 +479,7 @@ impl<const N: usize, M: MotionModel<N>> Ekf<N, M> {
                 variance: 1.0,
             })?;
         self.renormalize(backup)?;
+        self.record_update();
         Ok(outcomes)
     }
 

@@ -78,6 +78,15 @@ pub enum EstimatorError {
         /// Human-readable valid range, e.g. "> 0".
         expected: &'static str,
     },
+    /// A smoother cannot use a recorded forward pass: recording was not turned on, or
+    /// the record is inconsistent (an update recorded without its prediction step).
+    #[error("{what} (t = {time} s)")]
+    Smoother {
+        /// What is wrong.
+        what: String,
+        /// Time stamp of the offending record, s.
+        time: Time,
+    },
     /// An error from the shared vocabulary (checks without a time stamp).
     #[error(transparent)]
     Core(#[from] CoreError),
@@ -91,7 +100,8 @@ impl EstimatorError {
         match self {
             Self::NonFinite { time, .. }
             | Self::NotSymmetric { time, .. }
-            | Self::NotPositiveDefinite { time, .. } => Some(*time),
+            | Self::NotPositiveDefinite { time, .. }
+            | Self::Smoother { time, .. } => Some(*time),
             Self::TimeBackwards { next, .. } => Some(*next),
             _ => None,
         }

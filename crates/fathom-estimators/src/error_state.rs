@@ -22,6 +22,7 @@
 use fathom_core::Gaussian;
 use nalgebra::{Matrix1, Matrix3, SMatrix, SVector, Vector1, Vector3};
 
+use crate::smoother::{ForwardPass, SmoothedStep};
 use crate::{EstimatorError, Gate, GateThreshold, KalmanFilter, UpdateInfo};
 
 /// Number of error states.
@@ -48,9 +49,16 @@ pub type ErrorCovariance = SMatrix<f64, N_ERROR_STATES, N_ERROR_STATES>;
 /// the quantity and index with the time stamp; a covariance that stops being
 /// positive definite (e.g. an indefinite `Q_d`, a variance `<= 0`) is an error with
 /// the time; the filter is unchanged on error.
+///
+/// Smoothing ([`crate::smoother`], "Error-state filters"): after
+/// [`ErrorStateFilter::start_recording`] each prediction is a step with the predicted
+/// error (zero after a feedback) and each update records the error estimate before
+/// [`ErrorStateFilter::take_correction`] resets it; the smoothed error of a step
+/// refers to the nominal state *before* that step's feedback.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ErrorStateFilter {
     kf: KalmanFilter<N_ERROR_STATES>,
+    recording: Option<ForwardPass<N_ERROR_STATES>>,
 }
 
 impl ErrorStateFilter {
@@ -61,7 +69,43 @@ impl ErrorStateFilter {
     pub fn new(p0: &ErrorCovariance, t0: f64) -> Result<Self, EstimatorError> {
         Ok(Self {
             kf: KalmanFilter::new(Gaussian::new_unchecked(ErrorVector::zeros(), *p0), t0)?,
+            recording: None,
         })
+    }
+
+    /// Starts recording the forward pass for smoothing from the current estimate
+    /// (type docs); recording does not change any estimate.
+    pub fn start_recording(&mut self) {
+        self.recording = Some(ForwardPass::from_filter(&self.kf));
+    }
+
+    /// The forward pass recorded so far (`None` unless recording).
+    pub fn forward_pass(&self) -> Option<&ForwardPass<N_ERROR_STATES>> {
+        self.recording.as_ref()
+    }
+
+    /// Takes the recorded forward pass out (recording stops).
+    pub fn take_forward_pass(&mut self) -> Option<ForwardPass<N_ERROR_STATES>> {
+        self.recording.take()
+    }
+
+    /// The fixed-interval RTS smoother over the recorded pass: per step the smoothed
+    /// error relative to the nominal before that step's feedback (type docs).
+    ///
+    /// # Errors
+    /// [`EstimatorError::Smoother`] when recording is off, else as
+    /// [`ForwardPass::smooth`].
+    pub fn smooth(&self) -> Result<Vec<SmoothedStep<N_ERROR_STATES>>, EstimatorError> {
+        match &self.recording {
+            Some(pass) => pass.smooth(),
+            None => Err(not_recorded("error-state", self.kf.time())),
+        }
+    }
+
+    fn record_update(&mut self) {
+        if let Some(pass) = &mut self.recording {
+            pass.record_update(&self.kf);
+        }
     }
 
     /// A diagonal initial covariance from per-block sigmas
@@ -86,7 +130,11 @@ impl ErrorStateFilter {
         qd: &ErrorCovariance,
         t: f64,
     ) -> Result<(), EstimatorError> {
-        self.kf.predict(phi, qd, t)
+        self.kf.predict(phi, qd, t)?;
+        if let Some(pass) = &mut self.recording {
+            pass.record_prediction(phi, &self.kf);
+        }
+        Ok(())
     }
 
     /// Velocity update with the INS velocity `ins_vel_in_nav` and the aid
@@ -108,13 +156,12 @@ impl ErrorStateFilter {
         h.fixed_view_mut::<3, 3>(0, VEL)
             .copy_from(&Matrix3::identity());
         let nu = (ins_vel_in_nav - aid_vel_in_nav) - h * self.kf.state();
-        match gate {
-            Some(g) => self.kf.update_with_innovation_gated(&nu, &h, r, g),
-            None => self
-                .kf
-                .update_with_innovation(&nu, &h, r)
-                .map(Gate::Accepted),
-        }
+        let out = match gate {
+            Some(g) => self.kf.update_with_innovation_gated(&nu, &h, r, g)?,
+            None => Gate::Accepted(self.kf.update_with_innovation(&nu, &h, r)?),
+        };
+        self.record_update();
+        Ok(out)
     }
 
     /// Depth update: INS depth `ins_depth` (m, down) against the gauge's `depth`
@@ -134,7 +181,9 @@ impl ErrorStateFilter {
         let mut h = SMatrix::<f64, 1, N_ERROR_STATES>::zeros();
         h[(0, POS + 2)] = 1.0;
         let nu = Vector1::new(ins_depth - depth) - h * self.kf.state();
-        self.kf.update_with_innovation(&nu, &h, &Matrix1::new(r))
+        let info = self.kf.update_with_innovation(&nu, &h, &Matrix1::new(r))?;
+        self.record_update();
+        Ok(info)
     }
 
     /// The estimated error (for feedback); resets the error state to zero and keeps
@@ -156,6 +205,14 @@ impl ErrorStateFilter {
     /// The filter time, s.
     pub fn time(&self) -> f64 {
         self.kf.time()
+    }
+}
+
+/// The error of a smoother call without a recorded pass.
+pub(crate) fn not_recorded(filter: &str, time: f64) -> EstimatorError {
+    EstimatorError::Smoother {
+        what: format!("{filter} smoother: the forward pass was not recorded (start_recording)"),
+        time,
     }
 }
 

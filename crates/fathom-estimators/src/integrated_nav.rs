@@ -40,6 +40,7 @@
 use fathom_core::Gaussian;
 use nalgebra::{Matrix1, Matrix3, SMatrix, SVector, Vector1, Vector3};
 
+use crate::smoother::{ForwardPass, SmoothedStep};
 use crate::{EstimatorError, Gate, GateThreshold, KalmanFilter, UpdateInfo};
 
 /// A 9-vector / 9x9 matrix of this filter.
@@ -115,6 +116,7 @@ pub struct IntegratedNavFilter {
     acc_b: Matrix3<f64>,
     acc_t: f64,
     params: IntegratedNavParams,
+    recording: Option<ForwardPass<9>>,
 }
 
 impl IntegratedNavFilter {
@@ -148,7 +150,45 @@ impl IntegratedNavFilter {
             acc_b: Matrix3::zeros(),
             acc_t: 0.0,
             params: p,
+            recording: None,
         })
+    }
+
+    /// Starts recording the forward pass for smoothing ([`crate::smoother`]) from the
+    /// current estimate: each covariance step (the accumulated transition `Phi`) and
+    /// the updates at its time. Call it when no propagation is pending (right after
+    /// construction or an update); recording does not change any estimate.
+    pub fn start_recording(&mut self) {
+        self.recording = Some(ForwardPass::from_filter(&self.kf));
+    }
+
+    /// The forward pass recorded so far (`None` unless recording).
+    pub fn forward_pass(&self) -> Option<&ForwardPass<9>> {
+        self.recording.as_ref()
+    }
+
+    /// Takes the recorded forward pass out (recording stops).
+    pub fn take_forward_pass(&mut self) -> Option<ForwardPass<9>> {
+        self.recording.take()
+    }
+
+    /// The fixed-interval RTS smoother over the recorded pass (`[p, v, b]` per
+    /// covariance step).
+    ///
+    /// # Errors
+    /// [`EstimatorError::Smoother`] when recording is off, else as
+    /// [`ForwardPass::smooth`].
+    pub fn smooth(&self) -> Result<Vec<SmoothedStep<9>>, EstimatorError> {
+        match &self.recording {
+            Some(pass) => pass.smooth(),
+            None => Err(crate::error_state::not_recorded("9-state", self.time)),
+        }
+    }
+
+    fn record_update(&mut self) {
+        if let Some(pass) = &mut self.recording {
+            pass.record_update(&self.kf);
+        }
     }
 
     /// Propagates the state over one IMU interval `dt` with the INS's NED velocity
@@ -257,6 +297,9 @@ impl IntegratedNavFilter {
         }
         let (phi, q) = self.pending_model();
         self.kf.predict_nonlinear(&self.x, &phi, &q, self.time)?;
+        if let Some(pass) = &mut self.recording {
+            pass.record_prediction(&phi, &self.kf);
+        }
         self.acc_a = Matrix3::zeros();
         self.acc_b = Matrix3::zeros();
         self.acc_t = 0.0;
@@ -283,6 +326,7 @@ impl IntegratedNavFilter {
             None => Gate::Accepted(self.kf.update(z, &h, r)?),
         };
         self.x = *self.kf.state();
+        self.record_update();
         Ok(out)
     }
 
@@ -296,6 +340,7 @@ impl IntegratedNavFilter {
         h[(0, 2)] = 1.0;
         let info = self.kf.update(&Vector1::new(z), &h, &Matrix1::new(r))?;
         self.x = *self.kf.state();
+        self.record_update();
         Ok(info)
     }
 

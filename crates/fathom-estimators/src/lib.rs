@@ -45,6 +45,10 @@
 //! INS with GPS/INS, GREKF, MGPMF and particle-filter updates and the mode switching;
 //! it sees the map only through [`fathom_core::RayCaster`].
 //!
+//! Post-processing lives in [`smoother`]: the filters record their forward pass on
+//! request, and the Rauch-Tung-Striebel backward pass (fixed interval, or fixed lag)
+//! gives every step's estimate given all the data.
+//!
 //! Error convention: filter steps return [`EstimatorError`] variants carrying the
 //! filter time stamp; time-free helpers (fusion, [`gating::nis`], [`models`]) wrap a
 //! [`fathom_core::CoreError`]. Every failing step leaves the filter unchanged.
@@ -75,6 +79,7 @@
 //! | [`architectures::TrackToTrack`] | `step` | error: track, index, time | filter or fusion error with the time |
 //! | [`architectures::EqualizeFuseFeedback`] | `step` | error: track, sensor state / measurement, index, time | filter or fusion error with the time |
 //! | [`map_aided`] ([`map_aided::Ins12Filter`], [`map_aided::Grekf`], [`map_aided::Mgpmf`], [`map_aided::ParticleFilter`], [`map_aided::SwitchingFilter`]) | `predict`, `update_gps`, `update`, `update_map`, `observe_los` | error [`map_aided::MapAidedError`]: quantity, beam index, time; a pose from which no ray hits the map is [`map_aided::MapAidedError::PoseOutsideMap`] with the time (filter and particles unchanged) | error with the time |
+//! | [`smoother`] ([`smoother::ForwardPass`], [`smoother::FixedLagSmoother`]) | `push_*` / `record_*` (never fail; a misuse is kept), `smooth*`, `lagged` | error at `smooth*`: quantity, step index, time | [`EstimatorError::NotPositiveDefinite`] naming the step, with its time |
 //! | [`fusion`], [`architectures::rules`], [`gating::nis`] (no notion of time) | `fuse_*`, `nis` | [`EstimatorError::Core`] (the architectures add the time) | [`EstimatorError::Core`] |
 //!
 //! A NaN NIS never passes a gate ([`GateThreshold::accepts`]). The INS crate
@@ -106,6 +111,7 @@ pub mod noise;
 pub mod robust;
 pub mod schemes;
 pub mod simd;
+pub mod smoother;
 pub mod stacked;
 pub mod velocity_filter;
 pub mod wheel_odometry;

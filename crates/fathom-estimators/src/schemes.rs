@@ -372,6 +372,18 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
         self
     }
 
+    /// Records the forward pass for smoothing ([`Ekf::start_recording`], from the
+    /// current estimate): every prediction, epoch or group update and covariance
+    /// inflation becomes a step; rejected, stale and superseded measurements change
+    /// nothing, so the smoother ignores them as the filter did. Read the step of the
+    /// estimate at an evaluation instant with
+    /// `filter.ekf().forward_pass().map(|p| p.last_index())` and smooth with
+    /// [`Ekf::smooth`] at the end.
+    pub fn with_recording(mut self) -> Self {
+        self.ekf.start_recording();
+        self
+    }
+
     /// Measurements applied with an inflated variance (robust handling).
     pub fn downweighted(&self) -> usize {
         self.downweighted

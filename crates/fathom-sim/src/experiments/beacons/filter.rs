@@ -44,6 +44,9 @@ pub struct EkfSettings {
     pub include_motion_noise: bool,
     /// Factor on the process-noise sigmas (1 = as designed).
     pub process_noise_scale: f64,
+    /// Record the forward pass and smooth it (RTS) after the run
+    /// ([`SchemeRun::smoothed`]).
+    pub smooth: bool,
 }
 
 impl Default for EkfSettings {
@@ -56,6 +59,7 @@ impl Default for EkfSettings {
             init_yaw_sigma: 0.05,
             include_motion_noise: true,
             process_noise_scale: 1.0,
+            smooth: false,
         }
     }
 }
@@ -187,6 +191,19 @@ pub struct SchemeRun {
     pub outliers_untested: usize,
     /// Clean range samples rejected by the gate.
     pub false_rejections: usize,
+    /// The RTS-smoothed errors at the same instants (`settings.smooth`).
+    pub smoothed: Option<SmoothedErrors>,
+}
+
+/// The fixed-interval RTS-smoothed estimates of a scheme run at its evaluation instants.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SmoothedErrors {
+    /// 3D position error, m.
+    pub errors_3d: Vec<f64>,
+    /// NEES of the smoothed state against the smoothed covariance (4 dof).
+    pub nees: Vec<f64>,
+    /// Steps of the forward pass.
+    pub steps: usize,
 }
 
 /// Builds the time-ordered event stream of one run's data: DVL velocity and AHRS yaw
@@ -305,6 +322,11 @@ pub(super) fn run_scheme_on(
     .check()
     .map_err(|e| SimError::model("update scheme", e))?;
     let mut filter = SchemeFilter::new(ekf, config);
+    if setup.settings.smooth {
+        filter = filter.with_recording();
+    }
+    // Per evaluation instant: the forward-pass step and the true state.
+    let mut steps: Vec<(usize, Vector4<f64>)> = Vec::new();
 
     let n_eval = ((truth.end_time() - t0) / setup.settings.epoch_period + 1e-9).floor() as usize;
     let mut out = SchemeRun {
@@ -319,6 +341,7 @@ pub(super) fn run_scheme_on(
         outliers_accepted: 0,
         outliers_untested: 0,
         false_rejections: 0,
+        smoothed: None,
     };
     let fail = |e| SimError::model(format!("{} filter", scheme.short_name()), e);
     let period = setup.settings.epoch_period;
@@ -342,9 +365,27 @@ pub(super) fn run_scheme_on(
             out.nees
                 .push(fathom_stats::nees(&err, filter.ekf().covariance())?);
             out.estimates.push(x);
+            if let Some(pass) = filter.ekf().forward_pass() {
+                steps.push((pass.last_index(), x_true));
+            }
             Ok(())
         },
     )?;
+    if setup.settings.smooth {
+        let smoothed = filter.ekf().smooth().map_err(fail)?;
+        let mut s = SmoothedErrors {
+            errors_3d: Vec::with_capacity(steps.len()),
+            nees: Vec::with_capacity(steps.len()),
+            steps: smoothed.len(),
+        };
+        for (i, x_true) in &steps {
+            let st = &smoothed[*i];
+            let err = setup.motion.difference(&st.mean, x_true);
+            s.errors_3d.push(err.xyz().norm());
+            s.nees.push(fathom_stats::nees(&err, &st.cov)?);
+        }
+        out.smoothed = Some(s);
+    }
     let injected: HashSet<(usize, usize)> =
         data.outliers.iter().map(|o| (o.beacon, o.sample)).collect();
     for d in filter.decisions() {

@@ -61,6 +61,16 @@ pub struct SchemeStats {
     pub(super) injected: usize,
     pub(super) counts: Vec<ChannelCounts>,
     pub(super) errors: Vec<f64>,
+    /// The RTS-smoothed run (`smooth = true`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) smoothed: Option<SmoothedStats>,
+}
+
+/// A smoothed run's error statistics and time-averaged NEES.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SmoothedStats {
+    pub(super) stats: RunStats,
+    pub(super) nees_mean: f64,
 }
 
 pub(super) fn one_run(
@@ -82,13 +92,15 @@ pub(super) fn one_layout_run(
 
 /// What the analysis keeps of one scheme on one case of one run (the per-run scalars
 /// of the CIs, the paired differences and the per-run CSV).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct KeptStats {
     pub(super) stats: RunStats,
     pub(super) nees_mean: f64,
     pub(super) recall: f64,
     pub(super) rejected: usize,
     pub(super) false_rejections: usize,
+    /// Boxed: 8 bytes a kept run when `smooth` is off (campaign memory).
+    pub(super) smoothed: Option<Box<SmoothedStats>>,
 }
 
 /// Sums over a batch's runs of one scheme on one case, in run order.
@@ -153,6 +165,7 @@ pub(super) fn fold_run(record: Vec<Vec<SchemeStats>>, sums: &mut BatchSums) -> V
                 recall: s.recall,
                 rejected: s.rejected,
                 false_rejections: s.false_rejections,
+                smoothed: s.smoothed.map(Box::new),
             }
         }));
         kept.push(kept_case);
@@ -170,6 +183,17 @@ fn stats_of(detail: RunDetail) -> Result<Vec<Vec<SchemeStats>>, SimError> {
                     let stats = RunStats::of(&r.errors_3d)
                         .map_err(|e| SimError::model("run statistics", e))?;
                     let nees_mean = r.nees.iter().sum::<f64>() / r.nees.len().max(1) as f64;
+                    let smoothed = r
+                        .smoothed
+                        .as_ref()
+                        .map(|s| -> Result<SmoothedStats, SimError> {
+                            Ok(SmoothedStats {
+                                stats: RunStats::of(&s.errors_3d)
+                                    .map_err(|e| SimError::model("smoothed run statistics", e))?,
+                                nees_mean: s.nees.iter().sum::<f64>() / s.nees.len().max(1) as f64,
+                            })
+                        })
+                        .transpose()?;
                     Ok(SchemeStats {
                         stats,
                         nees_mean,
@@ -190,6 +214,7 @@ fn stats_of(detail: RunDetail) -> Result<Vec<Vec<SchemeStats>>, SimError> {
                         injected: r.outliers_injected,
                         counts: r.counts,
                         errors: r.errors_3d,
+                        smoothed,
                     })
                 })
                 .collect()

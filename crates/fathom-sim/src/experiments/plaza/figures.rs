@@ -3,6 +3,7 @@
 
 use fathom_estimators::schemes::Disposition;
 
+use super::analysis::{MAIN_METHODS, smoothed_name};
 use crate::SimError;
 use crate::experiment::Analysis;
 use crate::output::{CsvCell, fixed as f};
@@ -47,6 +48,17 @@ fn write_csv(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
             cols.push(m.calibration.iter().map(|c| c[0]).collect());
             headers.push(format!("{}_range_scale", m.name));
             cols.push(m.calibration.iter().map(|c| c[1]).collect());
+        }
+        if let Some(sm) = &m.smoothed {
+            let name = smoothed_name(&m.name);
+            headers.push(format!("{name}_x_m"));
+            cols.push(sm.est.iter().map(|e| e[0]).collect());
+            headers.push(format!("{name}_y_m"));
+            cols.push(sm.est.iter().map(|e| e[1]).collect());
+            headers.push(format!("{name}_err_m"));
+            cols.push(sm.err.clone());
+            headers.push(format!("{name}_sigma_pos_m"));
+            cols.push(sm.pos_sigma.clone());
         }
     }
     let h: Vec<&str> = headers.iter().map(String::as_str).collect();
@@ -155,6 +167,34 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
         }
     }
     out.figure("error_vs_time.svg", &plot)?;
+
+    // `smooth = true`: filtered against smoothed error of the main methods.
+    let smoothed: Vec<&MethodRun> = MAIN_METHODS
+        .iter()
+        .filter_map(|n| r.method(n))
+        .filter(|m| m.smoothed.is_some())
+        .collect();
+    if !smoothed.is_empty() {
+        let mut sp = LinePlot::new(
+            format!("{}: filtered and RTS-smoothed 2D error", r.data_name),
+            "time since start [s]",
+            "error [m]",
+        );
+        for m in smoothed {
+            sp = sp.with_series(err_series(m));
+            if let Some(sm) = &m.smoothed {
+                sp = sp.with_series(Series::new(
+                    smoothed_name(&m.name),
+                    time.iter()
+                        .zip(&sm.err)
+                        .step_by(step)
+                        .map(|(t, e)| (*t, *e))
+                        .collect(),
+                ));
+            }
+        }
+        out.figure("smoothed_error.svg", &sp)?;
+    }
 
     let base = r.settings.ablation_scheme.short_name();
     let mut ab = LinePlot::new(

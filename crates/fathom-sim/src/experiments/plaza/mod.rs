@@ -25,7 +25,10 @@ use crate::data::plaza::PlazaLog;
 use crate::experiment::{Analysis, Batch, Environment, Experiment, ScenarioFile};
 use crate::replay::plaza::{PlazaReplay, PlazaSettings, PlazaToml, replay};
 
-pub use analysis::{MAIN_METHODS, MAX_ERROR_LIMIT_M, REQUIRED_REDUCTION};
+pub use analysis::{
+    GTSAM_BATCH_M, MAIN_METHODS, MAX_ERROR_LIMIT_M, REQUIRED_REDUCTION, SMOOTHED_TARGET_M,
+    smoothed_name,
+};
 
 impl ScenarioFile for PlazaToml {
     fn experiment(&self) -> &str {
@@ -145,7 +148,12 @@ impl Experiment for Plaza {
         figures::write(&r, out)?;
         out.report(&format!(
             "Real data, one deterministic replay (no Monte Carlo: `runs` = 1, no CIs, no \
-             paper numbers). Data folder: `{}`.\n\n",
+             paper numbers{}). Data folder: `{}`.\n\n",
+            if p.settings.smooth {
+                "; the `paper` column of the smoothed rows holds the GTSAM batch reference"
+            } else {
+                ""
+            },
             dir.display()
         ));
         out.report(&report::report_section(&r));

@@ -386,5 +386,9 @@ pub(super) fn analyse(
         },
         out,
     );
+    if c.smooth {
+        let md = super::smoothed::section(p, runs, out)?;
+        out.report(&md);
+    }
     Ok(())
 }

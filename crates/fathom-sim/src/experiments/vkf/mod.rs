@@ -9,13 +9,15 @@
 //! literal "+-0.5 m/s" DVL bias reuses the same run streams.
 //!
 //! Files: `scenario` (schema and check), `sim` (the shared truth and one run),
-//! `analysis` (rows and claims), `figures`, `report`.
+//! `analysis` (rows and claims), `figures`, `report`, `smoothed` (`smooth = true`:
+//! the RTS-smoothed VKF-aided filter and ESKF).
 
 mod analysis;
 mod figures;
 mod report;
 mod scenario;
 mod sim;
+mod smoothed;
 
 use rand_chacha::ChaCha8Rng;
 
@@ -77,9 +79,9 @@ impl Experiment for Vkf {
         rng: &mut ChaCha8Rng,
     ) -> Result<RunOutput, SimError> {
         if batch == LITERAL {
-            sim::one_run(&p.c, &p.shared, &p.c.dvl_literal, rng, false)
+            sim::one_run(&p.c, &p.shared, &p.c.dvl_literal, rng, false, false)
         } else {
-            sim::one_run(&p.c, &p.shared, &p.c.dvl, rng, index == 0)
+            sim::one_run(&p.c, &p.shared, &p.c.dvl, rng, index == 0, p.c.smooth)
         }
     }
 

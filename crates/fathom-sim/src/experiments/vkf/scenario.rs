@@ -54,6 +54,14 @@ pub struct VkfScenario {
     ///
     /// Unit: m. Range: > 0.
     pub final_h_threshold_m: f64,
+    /// Post-processing: also run the fixed-interval RTS smoother over the VKF-aided
+    /// 9-state filter and the ESKF (main batch) and report `VKF+RTS` / `ESKF+RTS` rows
+    /// (the same statistics and CIs; the horizontal error inside the DVL-invalid
+    /// intervals) beside the filtered ones.
+    ///
+    /// Range: `true` or `false`. Default: `false`.
+    #[serde(default)]
+    pub smooth: bool,
     /// The route (paper §3.2).
     pub route: RouteToml,
     /// The seabed profile along the track.
@@ -406,6 +414,8 @@ crate::monte_carlo_scenario!(VkfScenario);
 /// The checked scenario.
 #[derive(Debug, Clone)]
 pub struct Checked {
+    /// `smooth`.
+    pub smooth: bool,
     pub runs: usize,
     pub base_seed: u64,
     pub literal_bias_runs: usize,
@@ -660,6 +670,7 @@ impl VkfScenario {
             ));
         }
         Ok(Checked {
+            smooth: self.smooth,
             runs,
             base_seed: self.base_seed,
             literal_bias_runs,

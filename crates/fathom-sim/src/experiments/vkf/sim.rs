@@ -9,7 +9,7 @@ use fathom_ins::earth::{Geodetic, curvilinear_offset};
 use fathom_ins::error_model::{
     self as em, BiasModel, Discretization, ImuErrorModel, ImuErrorParams, NavError,
 };
-use fathom_ins::{ImuIncrement, Strapdown, TruthSample, VerticalChannel, imu_from_truth};
+use fathom_ins::{ImuIncrement, InsState, Strapdown, TruthSample, VerticalChannel, imu_from_truth};
 use fathom_sensors::noise::gauss;
 use fathom_sensors::underwater::BottomLockDvlModel;
 use nalgebra::{Matrix3, Vector3};
@@ -147,6 +147,22 @@ pub struct RunOutput {
     pub gated_rejected_valid: f64,
     /// Figure series (run 0 only).
     pub detail: Option<Box<Detail>>,
+    /// The RTS-smoothed horizontal errors at 1 Hz (`smooth = true`, main batch).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub smoothed: Option<SmoothedErrors>,
+}
+
+/// Horizontal position errors of the RTS-smoothed filters at the 1 Hz instants, m.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct SmoothedErrors {
+    /// The VKF-aided 9-state filter.
+    pub vkf: Vec<f64>,
+    /// The 15-state ESKF (smoothed error applied to the nominal trajectory).
+    pub eskf: Vec<f64>,
+    /// Steps of the ESKF's forward pass.
+    pub eskf_steps: usize,
+    /// Steps of the 9-state filter's forward pass.
+    pub nav_steps: usize,
 }
 
 fn model_err<E: std::error::Error + Send + Sync + 'static>(
@@ -190,6 +206,7 @@ pub fn one_run(
     dvl_model: &BottomLockDvlModel,
     rng: &mut ChaCha8Rng,
     keep_detail: bool,
+    smooth: bool,
 ) -> Result<RunOutput, SimError> {
     let mut imu = c.imu.draw(rng);
     let dvl = dvl_model.draw(rng).map_err(model_err("DVL"))?;
@@ -229,6 +246,13 @@ pub fn one_run(
     )
     .map_err(model_err("ESKF"))?;
     let mut eskf_ins = Strapdown::new(truth0.to_ins_state()).map_err(model_err("ESKF INS"))?;
+    // Smoothing: per 1 Hz instant, the forward-pass steps of the VKF-aided filter and
+    // the ESKF, the ESKF's corrected nominal state and the true position.
+    let mut marks: Vec<(usize, usize, InsState, Geodetic, Vector3<f64>)> = Vec::new();
+    if smooth {
+        nav[1].start_recording();
+        eskf.start_recording();
+    }
     let mut est_ba = Vector3::zeros();
     let mut est_bg = Vector3::zeros();
     let mut f_sum = Vector3::zeros();
@@ -404,6 +428,15 @@ pub fn one_run(
                 err_v[m].push((f.velocity() - true_v).xy().norm());
             }
             err_h[ESKF].push(geo(&eskf_ins.state().position()));
+            if let (Some(pn), Some(pe)) = (nav[1].forward_pass(), eskf.forward_pass()) {
+                marks.push((
+                    pn.last_index(),
+                    pe.last_index(),
+                    *eskf_ins.state(),
+                    tp,
+                    sh.true_flat[k],
+                ));
+            }
             err_v[ESKF].push((eskf_ins.state().vel_in_nav - true_v).xy().norm());
             if let Some(d) = detail.as_mut() {
                 d.t1.push(t);
@@ -434,6 +467,11 @@ pub fn one_run(
             }
         }
     }
+    let smoothed = if smooth {
+        Some(smoothed_errors(&nav[1], &eskf, &marks)?)
+    } else {
+        None
+    };
     let frac = |a: usize, n: usize| if n == 0 { 0.0 } else { a as f64 / n as f64 };
     Ok(RunOutput {
         err_h,
@@ -444,5 +482,45 @@ pub fn one_run(
         gated_rejected_invalid: frac(rej_inv, n_inv),
         gated_rejected_valid: frac(rej_val, n_val),
         detail,
+        smoothed,
     })
+}
+
+/// The RTS smoother over the recorded passes, read at the 1 Hz instants `marks`
+/// (9-state step, ESKF step, ESKF corrected nominal, true position, true flat
+/// position). The ESKF's smoothed error relative to its corrected nominal is
+/// `x_{k|n} - x_{k|k}` (`fathom_estimators::smoother`, "Error-state filters").
+fn smoothed_errors(
+    nav: &IntegratedNavFilter,
+    eskf: &ErrorStateFilter,
+    marks: &[(usize, usize, InsState, Geodetic, Vector3<f64>)],
+) -> Result<SmoothedErrors, SimError> {
+    let sn = nav.smooth().map_err(model_err("9-state RTS smoother"))?;
+    let se = eskf.smooth().map_err(model_err("ESKF RTS smoother"))?;
+    let pe = eskf
+        .forward_pass()
+        .ok_or_else(|| SimError::invalid_argument("ESKF smoother", "nothing recorded"))?;
+    let mut out = SmoothedErrors {
+        vkf: Vec::with_capacity(marks.len()),
+        eskf: Vec::with_capacity(marks.len()),
+        eskf_steps: se.len(),
+        nav_steps: sn.len(),
+    };
+    for (i_nav, i_eskf, nominal, true_pos, true_flat) in marks {
+        let p = sn[*i_nav].mean.fixed_rows::<3>(0).into_owned();
+        out.vkf.push((p - true_flat).xy().norm());
+        let dx = se[*i_eskf].mean - pe.steps()[*i_eskf].filtered_mean;
+        let err = NavError {
+            pos_in_nav: dx.fixed_rows::<3>(es::POS).into_owned(),
+            vel_in_nav: Vector3::zeros(),
+            attitude: Vector3::zeros(),
+        };
+        let smoothed = em::correct_state(nominal, &err);
+        out.eskf.push(
+            horizontal_offset(true_pos, &smoothed.position())
+                .xy()
+                .norm(),
+        );
+    }
+    Ok(out)
 }

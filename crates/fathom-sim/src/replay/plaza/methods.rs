@@ -51,6 +51,28 @@ pub struct MethodRun {
     /// Per range of the log (index as in [`PlazaLog::ranges`]): the decision, if the
     /// range was processed.
     pub decisions: Vec<Option<Disposition>>,
+    /// The RTS-smoothed estimates of the same filter (`smooth = true`; `None` for dead
+    /// reckoning or when smoothing is off).
+    #[serde(default)]
+    pub smoothed: Option<SmoothedRun>,
+}
+
+/// A filter's fixed-interval RTS-smoothed estimates at the evaluation instants.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct SmoothedRun {
+    /// Smoothed `(x, y)`.
+    pub est: Vec<[f64; 2]>,
+    /// 2D position error, m.
+    pub err: Vec<f64>,
+    /// Statistics of `err`.
+    pub stats: RunStats,
+    /// Smoothed `sqrt(P_xx + P_yy)`, m.
+    pub pos_sigma: Vec<f64>,
+    /// Steps of the forward pass (the backward pass's length).
+    pub steps: usize,
+    /// Bytes the forward pass holds per step
+    /// ([`fathom_estimators::smoother::ForwardStep::BYTES`] for the filter's state size).
+    pub bytes_per_step: usize,
 }
 
 fn finish(
@@ -83,6 +105,7 @@ fn finish(
         downweighted: 0,
         recoveries: 0,
         decisions: Vec::new(),
+        smoothed: None,
     })
 }
 
@@ -195,6 +218,9 @@ fn run_filter<const N: usize>(
         .map_err(ctx)?;
         filter = filter.with_robust(policy);
     }
+    if s.smooth {
+        filter = filter.with_recording();
+    }
     let (offset_state, scale_state) = match cal {
         Calibration::None => (None, None),
         Calibration::Offset => (Some(3), None),
@@ -203,6 +229,7 @@ fn run_filter<const N: usize>(
     let mut est = Vec::with_capacity(prep.eval.len());
     let mut sig = Vec::with_capacity(prep.eval.len());
     let mut calib = Vec::with_capacity(prep.eval.len());
+    let mut steps = Vec::new();
     let mut events = prep
         .events(true)
         .into_iter()
@@ -240,6 +267,9 @@ fn run_filter<const N: usize>(
                 offset_state.map_or(0.0, |i| x[i]),
                 scale_state.map_or(0.0, |i| x[i]),
             ]);
+            if let Some(pass) = f.ekf().forward_pass() {
+                steps.push(pass.last_index());
+            }
             Ok(())
         },
     )?;
@@ -248,7 +278,13 @@ fn run_filter<const N: usize>(
     for event in events {
         filter.process(event).map_err(ctx)?;
     }
+    let smoothed = if s.smooth {
+        Some(smoothed_run(&filter, &steps, prep)?)
+    } else {
+        None
+    };
     let mut run = finish(v.name.clone(), Some(v.clone()), prep, est, sig, calib)?;
+    run.smoothed = smoothed;
     let total = ChannelCounts::total(filter.counts());
     run.accepted = total.accepted;
     run.rejected = total.rejected;
@@ -264,6 +300,41 @@ fn run_filter<const N: usize>(
     run.downweighted = filter.downweighted();
     run.recoveries = filter.recoveries();
     Ok(run)
+}
+
+/// The RTS smoother over `filter`'s recorded pass, read at the evaluation steps.
+fn smoothed_run<const N: usize, M, S>(
+    filter: &SchemeFilter<N, M, S>,
+    steps: &[usize],
+    prep: &PreparedLog,
+) -> Result<SmoothedRun, SimError>
+where
+    M: fathom_estimators::ekf::MotionModel<N>,
+    S: fathom_estimators::ekf::ScalarModel<N> + Clone,
+{
+    let ctx = |e| SimError::model("RTS smoother", e);
+    let smoothed = filter.ekf().smooth().map_err(ctx)?;
+    let mut est = Vec::with_capacity(steps.len());
+    let mut pos_sigma = Vec::with_capacity(steps.len());
+    for &i in steps {
+        let s = &smoothed[i];
+        est.push([s.mean[0], s.mean[1]]);
+        pos_sigma.push((s.cov[(0, 0)] + s.cov[(1, 1)]).sqrt());
+    }
+    let err: Vec<f64> = est
+        .iter()
+        .zip(&prep.eval)
+        .map(|(e, g)| (e[0] - g.1).hypot(e[1] - g.2))
+        .collect();
+    let stats = RunStats::of(&err).map_err(|e| SimError::model("smoothed error statistics", e))?;
+    Ok(SmoothedRun {
+        est,
+        err,
+        stats,
+        pos_sigma,
+        steps: smoothed.len(),
+        bytes_per_step: fathom_estimators::smoother::ForwardStep::<N>::BYTES,
+    })
 }
 
 /// Runs one variant.

@@ -34,7 +34,7 @@ mod settings;
 #[cfg(test)]
 mod tests;
 
-pub use methods::{MethodRun, run_dead_reckoning, run_variant};
+pub use methods::{MethodRun, SmoothedRun, run_dead_reckoning, run_variant};
 pub use prepare::{PreparedLog, PreparedRange};
 pub use ranges::{RangeAnalysis, analyse_ranges, truth_at};
 pub use settings::{

@@ -23,6 +23,13 @@ pub struct PlazaToml {
     ///
     /// Range: `"plaza"`.
     pub experiment: String,
+    /// Also run the fixed-interval RTS smoother over each filter's forward pass and
+    /// report the smoothed errors beside the filtered ones (`<method>+RTS`,
+    /// post-processing: every range of the log informs every instant).
+    ///
+    /// Range: `true` or `false`. Default: `false`.
+    #[serde(default)]
+    pub smooth: bool,
     /// Where the data is and how to read it.
     pub data: DataToml,
     /// Initial pose uncertainty.
@@ -209,6 +216,9 @@ impl Calibration {
 /// Checked settings of a Plaza replay.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct PlazaSettings {
+    /// Smooth every filter's forward pass (RTS).
+    #[serde(default)]
+    pub smooth: bool,
     /// `[data] dir`.
     pub data_dir: String,
     /// `[data] range_order`.
@@ -319,6 +329,7 @@ impl PlazaToml {
             ));
         }
         Ok(PlazaSettings {
+            smooth: self.smooth,
             data_dir: self.data.dir.clone(),
             range_order,
             position_sigma: require_positive(
