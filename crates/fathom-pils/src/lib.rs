@@ -24,11 +24,12 @@ pub mod epoch;
 pub mod faults;
 pub mod frame;
 pub mod link;
-// pub mod nav;
-// pub mod report;
-// pub mod scenario;
-// pub mod settings;
-// pub mod sim;
+pub mod nav;
+pub mod report;
+pub mod scenario;
+pub mod session;
+pub mod settings;
+pub mod sim;
 pub mod stats;
 
 /// Errors of a PILS run.
