@@ -100,6 +100,27 @@ fn run_err(e: impl std::fmt::Display) -> Failure {
     Failure::Run(anyhow!("{e}"))
 }
 
+/// Writes a session's files into `out` (whatever ended it), then returns its
+/// report or its error.
+fn finish<R>(s: fathom_pils::session::Session<R>, out: &Path) -> Result<R, Failure> {
+    std::fs::create_dir_all(out)
+        .with_context(|| format!("creating {}", out.display()))
+        .map_err(Failure::Run)?;
+    for (name, text) in &s.files {
+        let p = out.join(name);
+        std::fs::write(&p, text)
+            .with_context(|| format!("writing {}", p.display()))
+            .map_err(Failure::Run)?;
+    }
+    match s.error {
+        Some(e) => Err(Failure::Run(anyhow!(
+            "{e} (what was recorded is in {})",
+            out.display()
+        ))),
+        None => Ok(s.report),
+    }
+}
+
 /// Runs a `fathom pils` command.
 pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
     match &a.side {
@@ -110,8 +131,11 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
             out,
         }) => {
             let s = load(scenario, None)?;
-            let r = fathom_pils::session::simulate(&s, *bind, *nav, out).map_err(run_err)?;
-            Ok(sim_text(&r, out))
+            let mut link = fathom_pils::session::bind_sim(&s, *bind, *nav).map_err(run_err)?;
+            let addr = link.local_addr().map_err(run_err)?;
+            eprintln!("simulator on {addr}, sending to {nav}");
+            let r = fathom_pils::session::simulate_on(&mut link, &s, true).map_err(run_err)?;
+            finish(r, out).map(|r| sim_text(&r, out))
         }
         Some(PilsSide::Nav {
             scenario,
@@ -125,14 +149,15 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
             let addr = link.local_addr().map_err(run_err)?;
             // The first line tells a parent where to send (flushed before serving).
             println!("navigation listening on {addr}");
-            let r =
-                fathom_pils::session::navigate_on(&mut link, &s, s.method, out).map_err(run_err)?;
-            Ok(format!(
-                "navigation done: {} steps, {} solutions; outputs in {}\n",
-                r.steps,
-                r.solutions,
-                out.display()
-            ))
+            let r = fathom_pils::session::navigate_on(&mut link, &s, s.method).map_err(run_err)?;
+            finish(r, out).map(|r| {
+                format!(
+                    "navigation done: {} steps, {} solutions; outputs in {}\n",
+                    r.steps,
+                    r.solutions,
+                    out.display()
+                )
+            })
         }
         Some(PilsSide::Offline {
             scenario,
@@ -254,7 +279,7 @@ fn both(scenario: &Path, method: Option<&str>, out: &Path) -> Result<String, Fai
     )
     .map_err(run_err)?;
     let sim_out = out.join("sim");
-    let r = fathom_pils::session::simulate_on(&mut link, &s, &sim_out, true);
+    let r = fathom_pils::session::simulate_on(&mut link, &s, true).map_err(run_err);
     // The child ends on the power-off heartbeat or its own timeout.
     let deadline = Instant::now() + Duration::from_secs_f64(s.file.link.timeout_s + 2.0);
     let status = loop {
@@ -267,7 +292,7 @@ fn both(scenario: &Path, method: Option<&str>, out: &Path) -> Result<String, Fai
             }
         }
     };
-    let r = r.map_err(run_err)?;
+    let r = r.and_then(|r| finish(r, &sim_out))?;
     if !status.is_some_and(|s| s.success()) {
         return Err(Failure::Run(anyhow!(
             "the navigation process ended with {status:?}"

@@ -21,7 +21,8 @@ pub struct FaultParams {
     pub latency_s: f64,
     /// Standard deviation of the latency (normal, truncated at zero), s.
     pub jitter_s: f64,
-    /// Probability that a datagram is held back and sent after the next one.
+    /// Probability that a datagram is held back and sent after the next one (or
+    /// when its sender next waits for input).
     pub reorder: f64,
     /// Probability that a datagram is sent twice.
     pub duplicate: f64,

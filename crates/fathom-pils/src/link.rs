@@ -215,12 +215,18 @@ impl Link {
     }
 
     /// The next valid message from the peer before `deadline` (`None` at the
-    /// deadline); delayed sends go out meanwhile.
+    /// deadline); delayed sends go out meanwhile. A datagram held back for
+    /// reordering goes out now: it has been overtaken by the rest of the burst, and
+    /// holding it while the sender waits for an answer would turn every reorder into
+    /// a loss.
     ///
     /// # Errors
     /// [`PilsError::Io`] when the socket fails.
     pub fn recv(&mut self, deadline: Instant) -> Result<Option<MavMessage>, PilsError> {
         let mut buf = [0u8; 2048];
+        if let Some(h) = self.held.take() {
+            self.send_now(&h)?;
+        }
         loop {
             self.flush_due()?;
             if let Some(m) = self.inbox.pop_front() {

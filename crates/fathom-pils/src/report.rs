@@ -2,7 +2,6 @@
 //! method), the offline reference runs, and the output files of both sides.
 
 use std::collections::BTreeMap;
-use std::path::Path;
 
 use fathom_core::frames::euler_from_nav_from_body;
 use fathom_core::units::wrap_pi;
@@ -189,17 +188,10 @@ pub struct Row {
     pub ci95: Option<[f64; 2]>,
 }
 
-/// Writes `summary.json`, `pils.json` and `solutions.csv` into `dir`.
-///
-/// # Errors
-/// [`PilsError::Io`] when a file cannot be written.
-pub fn write_sim_outputs(
-    dir: &Path,
-    r: &SimReport,
-    sols: &BTreeMap<u64, Solution>,
-) -> Result<(), PilsError> {
-    std::fs::create_dir_all(dir)
-        .map_err(|e| PilsError::io(format!("create {}", dir.display()), e))?;
+/// The simulator's output files (name, content): `summary.json` (rows in the
+/// shape `fathom run` writes), `pils.json` (the whole report) and `solutions.csv`
+/// (the decoded solutions). The caller writes them (no file I/O in this crate).
+pub fn sim_files(r: &SimReport, sols: &BTreeMap<u64, Solution>) -> Vec<(&'static str, String)> {
     let mut rows = Vec::new();
     for (label, st) in [
         ("pils", &r.pils),
@@ -225,19 +217,17 @@ pub fn write_sim_outputs(
         "rows": rows,
         "claims": [],
     });
-    let w = |name: &str, text: String| {
-        std::fs::write(dir.join(name), text).map_err(|e| PilsError::io(format!("write {name}"), e))
-    };
-    w(
-        "summary.json",
-        serde_json::to_string_pretty(&summary).unwrap_or_default(),
-    )?;
-    w(
-        "pils.json",
-        serde_json::to_string_pretty(r).unwrap_or_default(),
-    )?;
-    w("solutions.csv", solutions_csv(sols))?;
-    Ok(())
+    vec![
+        (
+            "summary.json",
+            serde_json::to_string_pretty(&summary).unwrap_or_default(),
+        ),
+        (
+            "pils.json",
+            serde_json::to_string_pretty(r).unwrap_or_default(),
+        ),
+        ("solutions.csv", solutions_csv(sols)),
+    ]
 }
 
 /// Solutions as CSV with round-trip `f64` text.
