@@ -29,7 +29,7 @@ pub struct Session<R> {
 }
 
 /// The simulator side on a bound link (`offline_refs`: also run the two offline
-/// references and compare with them).
+/// references and compare with them, when the session completed).
 ///
 /// # Errors
 /// [`PilsError`] when the run cannot be set up or an offline reference fails; link
@@ -44,7 +44,8 @@ pub fn simulate_on(
     let o = run_sim(link, &sh, &run, s);
     let pils = (!o.solutions.is_empty()).then(|| evaluate(&run, &o.solutions));
     let (mut oq, mut of, mut equal, mut diff) = (None, None, None, Default::default());
-    if offline_refs {
+    // A failed session is not compared (and ends quickly: within the timeout).
+    if offline_refs && o.error.is_none() {
         let q = offline(&sh, &run, s.method, true)?;
         let f = offline(&sh, &run, s.method, false)?;
         oq = Some(evaluate(&run, &q));
