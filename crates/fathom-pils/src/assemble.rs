@@ -1,0 +1,120 @@
+//! The messages of one step gathered into an [`Epoch`]: what the navigation has
+//! received for a step (IMU, GPS outputs, range beams, the initial estimate), whether
+//! it is complete against what the schedule says is due, and the epoch it makes.
+
+use fathom_sensors::gnss::LocalFrame;
+use mavlink::dialects::common::MavMessage;
+
+use crate::codec::{
+    ImuReading, RangeWire, decode_distance, decode_gps, decode_imu, decode_initial, decode_scan,
+    epoch_from_parts,
+};
+use crate::epoch::{Epoch, GpsReading, InitialEstimate};
+
+/// What is due at a step (both sides derive it from the scenario).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Due {
+    /// `HIL_GPS` messages.
+    pub gps: usize,
+    /// Range messages (`DISTANCE_SENSOR` or `OBSTACLE_DISTANCE`).
+    pub ranges: usize,
+    /// The initial estimate.
+    pub init: bool,
+}
+
+/// The messages received for one step.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct StepParts {
+    /// The IMU sample.
+    pub imu: Option<ImuReading>,
+    /// GPS outputs by receiver id.
+    pub gps: Vec<GpsReading>,
+    /// Range beams received (beam order), `None` until the first range message.
+    pub ranges: Option<Vec<Option<f64>>>,
+    /// Range messages received (distinct).
+    pub range_messages: usize,
+    range_seen: Vec<bool>,
+    /// The initial estimate.
+    pub init: Option<InitialEstimate>,
+}
+
+impl StepParts {
+    /// Adds a message; returns `false` when it does not belong to an epoch (another
+    /// type, a beam index or scan block outside the sensor, an invalid initial
+    /// estimate). A repeated part replaces the earlier copy (duplicates carry the
+    /// same content).
+    pub fn add(&mut self, m: &MavMessage, frame: &LocalFrame, wire: &RangeWire) -> bool {
+        match m {
+            MavMessage::HIL_SENSOR(d) => {
+                self.imu = Some(decode_imu(d));
+                true
+            }
+            MavMessage::HIL_GPS(d) => {
+                let g = decode_gps(d, frame);
+                self.gps.retain(|x| x.id != g.id);
+                self.gps.push(g);
+                self.gps.sort_by_key(|x| x.id);
+                true
+            }
+            MavMessage::DISTANCE_SENSOR(d) => match decode_distance(d, wire) {
+                Some((beam, r)) => {
+                    self.put_ranges(beam, beam, &[r], wire);
+                    true
+                }
+                None => false,
+            },
+            MavMessage::OBSTACLE_DISTANCE(d) => match decode_scan(d, wire) {
+                Some((first, r)) => {
+                    self.put_ranges(first / crate::codec::SCAN_SLOTS, first, &r, wire);
+                    true
+                }
+                None => false,
+            },
+            MavMessage::ODOMETRY(d) => match decode_initial(d, 0) {
+                Some(i) => {
+                    self.init = Some(i);
+                    true
+                }
+                None => false,
+            },
+            _ => false,
+        }
+    }
+
+    fn put_ranges(&mut self, msg_index: usize, first: usize, r: &[Option<f64>], wire: &RangeWire) {
+        let n = wire.beams();
+        let ranges = self.ranges.get_or_insert_with(|| vec![None; n]);
+        if self.range_seen.len() != wire.messages() {
+            self.range_seen = vec![false; wire.messages()];
+        }
+        for (slot, v) in ranges.iter_mut().skip(first).zip(r) {
+            *slot = *v;
+        }
+        if let Some(seen) = self.range_seen.get_mut(msg_index)
+            && !*seen
+        {
+            *seen = true;
+            self.range_messages += 1;
+        }
+    }
+
+    /// Whether everything `due` has arrived.
+    pub fn complete(&self, due: &Due) -> bool {
+        self.imu.is_some()
+            && self.gps.len() >= due.gps
+            && self.range_messages >= due.ranges
+            && (!due.init || self.init.is_some())
+    }
+
+    /// The epoch of step `step` after the IMU stamp `prev_usec` (needs the IMU).
+    pub fn into_epoch(self, step: u64, prev_usec: u64, _wire: &RangeWire) -> Option<Epoch> {
+        let imu = self.imu?;
+        Some(epoch_from_parts(
+            step,
+            &imu,
+            prev_usec,
+            self.gps,
+            self.ranges,
+        ))
+    }
+}

@@ -1,0 +1,291 @@
+//! Processor-in-the-loop (issue 21): `fathom pils` as two real processes on
+//! loopback. Lockstep equals the offline run fed the same MAVLink-quantized data,
+//! bit for bit, also with junk from a foreign address and with link faults; a
+//! killed peer ends the other side with a non-zero exit within the timeout.
+
+use std::io::{BufRead, BufReader};
+use std::net::{SocketAddr, UdpSocket};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::support::{fathom, fathom_bin, scratch};
+
+/// A short flight (one 50 m leg, 1 s of rest, about 35 s simulated).
+fn settings(link: &str) -> String {
+    format!(
+        "experiment = \"pils\"\nseed = 3\nmethod = \"MGPMF\"\n[flight]\nlegs = 1\nside_m = 50.0\n\
+         rest_s = 1.0\nhover_s = 0.5\n[link]\ntimeout_s = 3.0\nretransmit_s = 0.02\n{link}"
+    )
+}
+
+fn json(path: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    serde_json::from_str(&text).unwrap()
+}
+
+/// The offline run with the MAVLink quantization, through the binary.
+fn offline_quantized(dir: &Path, file: &str) -> String {
+    let r = fathom(
+        dir,
+        &["pils", "offline", file, "--quantized", "--out", "q.csv"],
+    );
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    std::fs::read_to_string(dir.join("q.csv")).unwrap()
+}
+
+/// `fathom pils FILE`: the parent prints both addresses on stderr first.
+fn spawn_both(dir: &Path, file: &str) -> (Child, SocketAddr) {
+    let mut child = Command::new(fathom_bin())
+        .args(["pils", file, "--out", "out"])
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let first = lines.next().unwrap().unwrap();
+    // "simulator on A, navigation (pid N) on B"
+    let nav: SocketAddr = first
+        .rsplit(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap_or_else(|_| panic!("{first}"));
+    std::thread::spawn(move || lines.for_each(drop));
+    (child, nav)
+}
+
+#[test]
+fn lockstep_two_processes_equal_offline_quantized_run_despite_foreign_junk() {
+    let dir = scratch("pils-lockstep");
+    std::fs::write(dir.join("pils.toml"), settings("")).unwrap();
+    let (child, nav) = spawn_both(&dir, "pils.toml");
+    // Junk from another address while the run goes: random bytes, a truncated and a
+    // complete-looking MAVLink 2 frame. The navigation drops all of it.
+    let junk = UdpSocket::bind("127.0.0.1:0").unwrap();
+    let mut sent = 0u64;
+    for i in 0u8..200 {
+        let mut frame = vec![0xFD, 9, 0, 0, i, 1, 1, 0, 0, 0];
+        frame.extend((0..11).map(|j| i.wrapping_mul(31).wrapping_add(j)));
+        let d: &[u8] = match i % 3 {
+            0 => &frame[..],
+            1 => &frame[..6],
+            _ => &frame[3..],
+        };
+        if junk.send_to(d, nav).is_ok() {
+            sent += 1;
+        }
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let out = child.wait_with_output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("equal to the offline run with MAVLink quantization: true"),
+        "{stdout}"
+    );
+    let sim = json(&dir.join("out/sim/pils.json"));
+    assert_eq!(sim["status"], "ok");
+    assert_eq!(sim["equal_to_offline_quantized"], true);
+    assert_eq!(sim["steps_sent"], sim["steps_total"]);
+    assert!(
+        sim["solutions"].as_u64().unwrap() > 2000,
+        "{}",
+        sim["solutions"]
+    );
+    assert!(sim["latency"]["p50_ms"].as_f64().unwrap() > 0.0);
+    assert!(sim["real_time_factor"].as_f64().unwrap() > 0.0);
+    let nav_report = json(&dir.join("out/nav/nav.json"));
+    assert_eq!(nav_report["status"], "ok");
+    let foreign = nav_report["link"]["dropped"]["foreign_address"]
+        .as_u64()
+        .unwrap_or(0);
+    assert_eq!(
+        foreign, sent,
+        "every foreign datagram is counted and dropped"
+    );
+    // Independently: the simulator's decoded solutions are the offline ones.
+    let pils_csv = std::fs::read_to_string(dir.join("out/sim/solutions.csv")).unwrap();
+    assert_eq!(pils_csv, offline_quantized(&dir, "pils.toml"));
+    let summary = json(&dir.join("out/sim/summary.json"));
+    assert!(
+        summary["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|r| r["method"] == "pils/MGPMF" && r["metric"] == "rmse_3d")
+    );
+}
+
+#[test]
+fn lockstep_over_faulty_signed_link_is_unchanged_and_counts_everything() {
+    let dir = scratch("pils-faults");
+    let faults = "signing_passphrase = \"shared\"\n[link.faults]\nloss = 0.05\nreorder = 0.05\n\
+                  duplicate = 0.05\ncorrupt = 0.05\njunk = 0.05\nlatency_s = 0.0005\njitter_s = 0.0002\n";
+    std::fs::write(dir.join("pils.toml"), settings(faults)).unwrap();
+    let r = fathom(&dir, &["pils", "pils.toml", "--out", "out"]);
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    let sim = json(&dir.join("out/sim/pils.json"));
+    assert_eq!(sim["status"], "ok");
+    assert_eq!(sim["equal_to_offline_quantized"], true);
+    assert!(sim["retransmissions"].as_u64().unwrap() > 0);
+    let nav = json(&dir.join("out/nav/nav.json"));
+    let dropped = &nav["link"]["dropped"];
+    for why in ["bad_crc", "stale"] {
+        assert!(dropped[why].as_u64().unwrap_or(0) > 0, "{why}: {dropped}");
+    }
+    assert!(sim["link"]["datagrams_lost_injected"].as_u64().unwrap() > 0);
+    assert!(sim["link"]["junk_sent"].as_u64().unwrap() > 0);
+    // The same result as the clean link: the offline quantized run.
+    let csv = std::fs::read_to_string(dir.join("out/sim/solutions.csv")).unwrap();
+    assert_eq!(csv, offline_quantized(&dir, "pils.toml"));
+    // Negative control: a navigation with another key accepts nothing, and the
+    // simulator gives up after the timeout with a non-zero exit.
+    std::fs::write(
+        dir.join("other.toml"),
+        settings(&faults.replace("shared", "other")).replace("timeout_s = 3.0", "timeout_s = 6.0"),
+    )
+    .unwrap();
+    let mut nav = Command::new(fathom_bin())
+        .args(["pils", "nav", "other.toml", "--out", "nav2"])
+        .current_dir(&dir)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    let addr = first_addr(&mut nav);
+    let r = fathom(
+        &dir,
+        &[
+            "pils",
+            "sim",
+            "pils.toml",
+            "--nav",
+            &addr.to_string(),
+            "--out",
+            "sim2",
+        ],
+    );
+    assert_ne!(r.code, 0);
+    assert!(r.stderr.contains("silent"), "{}", r.stderr);
+    let _ = nav.wait();
+    let nav2 = json(&dir.join("nav2/nav.json"));
+    assert!(
+        nav2["link"]["dropped"]["bad_signature"]
+            .as_u64()
+            .unwrap_or(0)
+            > 0,
+        "{nav2}"
+    );
+}
+
+/// The address a `fathom pils nav` prints on its first line.
+fn first_addr(nav: &mut Child) -> SocketAddr {
+    let mut line = String::new();
+    let mut reader = BufReader::new(nav.stdout.take().unwrap());
+    reader.read_line(&mut line).unwrap();
+    // Keep the pipe open (a later line must not hit a closed pipe).
+    std::thread::spawn(move || std::io::copy(&mut reader, &mut std::io::sink()));
+    line.trim()
+        .rsplit(' ')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap_or_else(|_| panic!("{line}"))
+}
+
+/// Waits for `child` at most `limit`; its exit code (`None`: still running).
+fn wait_for(child: &mut Child, limit: Duration) -> Option<i32> {
+    let t0 = Instant::now();
+    while t0.elapsed() < limit {
+        if let Some(s) = child.try_wait().unwrap() {
+            return Some(s.code().unwrap_or(-1));
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    None
+}
+
+#[test]
+fn a_killed_peer_ends_the_other_side_within_the_timeout_with_outputs() {
+    let dir = scratch("pils-kill");
+    // Real-time pacing: the run lasts ~35 s of wall time, long enough to kill.
+    std::fs::write(
+        dir.join("pils.toml"),
+        settings("pacing = \"realtime\"\n").replace("timeout_s = 3.0", "timeout_s = 1.0"),
+    )
+    .unwrap();
+    let spawn_nav = |out: &str| {
+        Command::new(fathom_bin())
+            .args(["pils", "nav", "pils.toml", "--out", out])
+            .current_dir(&dir)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    let spawn_sim = |addr: SocketAddr, out: &str| {
+        Command::new(fathom_bin())
+            .args([
+                "pils",
+                "sim",
+                "pils.toml",
+                "--nav",
+                &addr.to_string(),
+                "--out",
+                out,
+            ])
+            .current_dir(&dir)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap()
+    };
+    // Kill the navigation: the simulator exits non-zero within the timeout.
+    let mut nav = spawn_nav("nav1");
+    let addr = first_addr(&mut nav);
+    let mut sim = spawn_sim(addr, "sim1");
+    std::thread::sleep(Duration::from_secs(4));
+    assert!(
+        sim.try_wait().unwrap().is_none(),
+        "the run should still be going"
+    );
+    nav.kill().unwrap();
+    let _ = nav.wait();
+    let code = wait_for(&mut sim, Duration::from_secs(5));
+    assert!(matches!(code, Some(c) if c != 0), "simulator: {code:?}");
+    let report = json(&dir.join("sim1/pils.json"));
+    assert!(
+        report["status"]
+            .as_str()
+            .unwrap()
+            .contains("navigation silent"),
+        "{}",
+        report["status"]
+    );
+    assert!(report["solutions"].as_u64().unwrap() > 0);
+    // Kill the simulator: the navigation exits non-zero within the timeout.
+    let mut nav = spawn_nav("nav2");
+    let addr = first_addr(&mut nav);
+    let mut sim = spawn_sim(addr, "sim2");
+    std::thread::sleep(Duration::from_secs(4));
+    sim.kill().unwrap();
+    let _ = sim.wait();
+    let code = wait_for(&mut nav, Duration::from_secs(4));
+    assert!(matches!(code, Some(c) if c != 0), "navigation: {code:?}");
+    let report = json(&dir.join("nav2/nav.json"));
+    assert!(
+        report["status"]
+            .as_str()
+            .unwrap()
+            .contains("simulator silent"),
+        "{}",
+        report["status"]
+    );
+}
