@@ -19,5 +19,6 @@ mod noise;
 mod plaza;
 mod quadrotor_ins;
 mod report_text;
+mod urban;
 mod user_scenarios;
 mod vkf;

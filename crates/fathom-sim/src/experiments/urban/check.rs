@@ -203,6 +203,8 @@ pub struct Checked {
     pub ablation_runs: usize,
     /// The ablations.
     pub ablations: Vec<Ablation>,
+    /// The settings the paper does not give, `(scenario key, value)`, for the report.
+    pub unstated: Vec<(String, String)>,
 }
 
 fn model_err(file: &str, key: &str, e: impl std::fmt::Display) -> SimError {
@@ -955,6 +957,7 @@ impl UrbanScenario {
             scenes,
             ablation_runs: a.runs.min(self.runs),
             ablations,
+            unstated: self.unstated(),
         })
     }
 }

@@ -35,6 +35,7 @@ mod report;
 pub mod run;
 pub mod scenario;
 pub mod sense;
+mod settings;
 pub mod trace;
 pub mod world;
 

@@ -337,3 +337,49 @@ pub fn fold_run(record: RunRecord, fold: &mut BatchFold) -> KeptRun {
         })
         .collect()
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The grid marginal sums the yaw axis in the MGPMF's order (north major, yaw
+    /// minor); a wrong point count gives an empty snapshot, not a panic.
+    #[test]
+    fn grid_snapshot_marginalizes_yaw() {
+        let dims = [2, 3, 2];
+        let mut points = Vec::new();
+        for i in 0..2 {
+            for j in 0..3 {
+                for k in 0..2 {
+                    points.push(Vector3::new(i as f64, 10.0 * j as f64, k as f64));
+                }
+            }
+        }
+        let weights: Vec<f64> = (0..12).map(|w| w as f64).collect();
+        let g = GridSnapshot::of(1.0, &points, &weights, dims);
+        assert_eq!(g.north, vec![0.0, 1.0]);
+        assert_eq!(g.east, vec![0.0, 10.0, 20.0]);
+        assert_eq!(g.weights[0], vec![1.0, 5.0, 9.0]);
+        assert_eq!(g.weights[1], vec![13.0, 17.0, 21.0]);
+        assert!(
+            GridSnapshot::of(1.0, &points[1..], &weights[1..], dims)
+                .weights
+                .is_empty()
+        );
+    }
+
+    /// The mean curves stop where fewer than half of the runs reached the epoch.
+    #[test]
+    fn fold_means_cover_the_epochs_most_runs_reached() {
+        let f = MethodFold {
+            sum_3d: vec![4.0, 6.0, 1.0],
+            sum_vel: vec![2.0, 2.0, 1.0],
+            sum_att: vec![0.0, 0.0, 0.0],
+            count: vec![4, 2, 1],
+            hist: Vec::new(),
+        };
+        let (p, v, _) = f.means();
+        assert_eq!(p, vec![1.0, 3.0]);
+        assert_eq!(v, vec![0.5, 1.0]);
+    }
+}
