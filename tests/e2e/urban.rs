@@ -117,6 +117,7 @@ fn preset_rows_claims_figures_and_report() {
         "Paper against this run",
         "## Claims",
         "## Ablations",
+        "## Spread over runs",
         "eq. (7), (9)",
         "eq. (21)/(22)",
         "## Settings the paper does not give",

@@ -111,7 +111,7 @@ pub(super) fn analyse(
     }
     per_run_csv(c, main, out)?;
     figures::write(prep, main_fold, out)?;
-    report::write(prep, out);
+    report::write(prep, main, out);
     Ok(())
 }
 

@@ -14,7 +14,7 @@
 //! | file | job |
 //! | --- | --- |
 //! | [`scenario`] | the TOML schema |
-//! | [`check`] | scenario -> checked library types |
+//! | [`check`], `check_scene`, `settings` | scenario -> checked library types; the settings the paper leaves open |
 //! | [`world`] | worlds (presets, OBJ / STL files), path checks, satellites |
 //! | [`sense`] | sensor data of a run |
 //! | [`nav`] | the six methods |
@@ -25,6 +25,7 @@
 
 mod analysis;
 pub mod check;
+mod check_scene;
 pub mod claims;
 pub mod closed_loop;
 mod figures;

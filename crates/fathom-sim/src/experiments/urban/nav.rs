@@ -109,7 +109,7 @@ enum Aider {
     None,
     Grekf(Grekf),
     Mgpmf(Box<Mgpmf>),
-    Particle(Box<ParticleFilter>, ChaCha8Rng),
+    Particle(Box<ParticleFilter>, Box<ChaCha8Rng>),
 }
 
 /// Counters of a run.
@@ -231,7 +231,7 @@ impl Nav {
             Method::Mgpmf => Aider::Mgpmf(Box::new(Mgpmf::new(f.mgpmf))),
             Method::Particle => Aider::Particle(
                 Box::new(ParticleFilter::new(f.particle)),
-                particle_rng.clone(),
+                Box::new(particle_rng.clone()),
             ),
             _ => Aider::None,
         };
@@ -432,7 +432,7 @@ impl Nav {
                 .update(&mut self.filter, &nominal, &self.beams, baro, env.map)
                 .is_ok(),
             Aider::Particle(p, rng) => p
-                .update(&mut self.filter, &nominal, &self.beams, baro, env.map, rng)
+                .update(&mut self.filter, &nominal, &self.beams, baro, env.map, &mut **rng)
                 .is_ok(),
         };
         if ok {

@@ -7,8 +7,10 @@
 use fathom_estimators::map_aided::PAPER_FINDINGS;
 use fathom_traj::quadrotor::{EQ21_EQ22_FINDINGS, eq22_discrepancies};
 
+use super::analysis::{metric_index, values};
 use super::claims::{claims, method_row};
 use super::nav::Method;
+use super::record::KeptRun;
 use super::world::Prepared;
 use crate::experiment::Analysis;
 use crate::output::{Row, fixed as f, md_table};
@@ -55,7 +57,7 @@ fn relation(r: Option<&Row>) -> &'static str {
 }
 
 /// Adds the report text to `out`.
-pub(super) fn write(prep: &Prepared, out: &mut Analysis) {
+pub(super) fn write(prep: &Prepared, main: &[KeptRun], out: &mut Analysis) {
     let c = &prep.checked;
     let rows = out.rows().to_vec();
     let mut md = String::new();
@@ -149,6 +151,7 @@ pub(super) fn write(prep: &Prepared, out: &mut Analysis) {
                 .join(", ")
         ));
     }
+    md.push_str(&spread_text(prep, main));
     md.push_str(&shadowing_text(c, &rows));
     md.push_str(&ablation_text(prep, &rows));
     md.push_str("## The paper's inconsistencies found on the way\n\n");
@@ -171,6 +174,49 @@ pub(super) fn write(prep: &Prepared, out: &mut Analysis) {
         md.push_str(&format!("- `{k}`: {val}\n"));
     }
     out.report(&md);
+}
+
+/// Runs whose 3-D RMSE exceeds this multiple of the median run count as diverged.
+const DIVERGED_FACTOR: f64 = 10.0;
+
+/// The median and the diverged runs per scenario and map-aided method: a mean over
+/// runs is dominated by a few lost tracks, which the median shows.
+fn spread_text(prep: &Prepared, main: &[KeptRun]) -> String {
+    let c = &prep.checked;
+    let Some(k) = metric_index("rmse_3d") else {
+        return String::new();
+    };
+    let mut md = format!(
+        "## Spread over runs (rmse_3d: median, and runs above {DIVERGED_FACTOR} x the median)\n\n"
+    );
+    let mut t = Vec::new();
+    for (s, spec) in c.scenes.iter().enumerate() {
+        for (m, method) in Method::ALL.iter().enumerate() {
+            if main.is_empty() || main[0].len() <= s {
+                continue;
+            }
+            let mut v = values(main, s, m, k);
+            v.sort_by(f64::total_cmp);
+            let median = v[v.len() / 2];
+            let diverged: Vec<String> = (0..main.len())
+                .filter(|i| main[*i][s].stats[m].values()[k] > DIVERGED_FACTOR * median)
+                .map(|i| i.to_string())
+                .collect();
+            t.push(vec![
+                method_row(&spec.name, *method),
+                f(median, 3),
+                f(v[v.len() - 1], 3),
+                format!("{} of {}", diverged.len(), v.len()),
+                diverged.join(" "),
+            ]);
+        }
+    }
+    md.push_str(&md_table(
+        &["row", "median m", "worst m", "diverged", "runs"],
+        &t,
+    ));
+    md.push('\n');
+    md
 }
 
 /// What the GNSS shadowing did to the GPS-only methods.
