@@ -240,6 +240,9 @@ mod tests {
         r
     }
 
+    /// A row changed: `(method, metric, value, CI, the claims that must flip)`.
+    type Flip<'a> = (&'a str, &'a str, f64, [f64; 2], &'a [&'a str]);
+
     fn verdict(c: &[Claim], id: &str) -> bool {
         c.iter().find(|c| c.id == id).unwrap().holds
     }
@@ -261,7 +264,7 @@ mod tests {
         for id in ids {
             assert!(verdict(&base, id), "{id}: {base:?}");
         }
-        let flips: [(&str, &str, f64, [f64; 2], &[&str]); 6] = [
+        let flips: [Flip<'_>; 6] = [
             (
                 "bridge/GREKF",
                 "rmse_3d",

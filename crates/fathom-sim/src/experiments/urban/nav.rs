@@ -432,7 +432,14 @@ impl Nav {
                 .update(&mut self.filter, &nominal, &self.beams, baro, env.map)
                 .is_ok(),
             Aider::Particle(p, rng) => p
-                .update(&mut self.filter, &nominal, &self.beams, baro, env.map, &mut **rng)
+                .update(
+                    &mut self.filter,
+                    &nominal,
+                    &self.beams,
+                    baro,
+                    env.map,
+                    &mut **rng,
+                )
                 .is_ok(),
         };
         if ok {
