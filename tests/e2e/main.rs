@@ -21,5 +21,6 @@ mod plaza;
 mod quadrotor_ins;
 mod report_text;
 mod smoother;
+mod urban;
 mod user_scenarios;
 mod vkf;

@@ -460,7 +460,12 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         bar.finish_and_clear();
     }
     let (result, info) = outcome.map_err(|e| {
-        let usage = matches!(e, SimError::InvalidArgument { .. });
+        // a scenario value rejected while preparing (e.g. a world file that does not
+        // fit its path) is a configuration error too
+        let usage = matches!(
+            e,
+            SimError::InvalidArgument { .. } | SimError::Invalid { .. }
+        );
         let e = anyhow!(one_line(&error_chain(&e)));
         if usage {
             Failure::Usage(e)

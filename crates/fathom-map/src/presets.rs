@@ -226,6 +226,12 @@ pub struct BuildingsParams {
     pub glass_facades: bool,
     /// Ground margin around the outer buildings. Default 100.
     pub ground_margin_m: f64,
+    /// Buildings per outer side, separated by streets of `street_width_m` (cross
+    /// streets give a range sensor along-track features; the gaps open the sky).
+    /// Default 1: one continuous building per side.
+    pub outer_buildings_per_side: usize,
+    /// Width of the streets between the outer buildings of a side. Default 10.
+    pub street_width_m: f64,
 }
 
 impl Default for BuildingsParams {
@@ -239,6 +245,8 @@ impl Default for BuildingsParams {
             outer_heights_m: [60.0, 70.0, 40.0, 50.0],
             glass_facades: true,
             ground_margin_m: 100.0,
+            outer_buildings_per_side: 1,
+            street_width_m: 10.0,
         }
     }
 }
@@ -276,6 +284,23 @@ impl BuildingsParams {
         }
         for (i, &h) in p.outer_heights_m.iter().enumerate() {
             check_positive(&format!("outer_heights_m[{i}]"), h)?;
+        }
+        if !(1..=100).contains(&p.outer_buildings_per_side) {
+            return Err(MapError::InvalidParameter {
+                field: "outer_buildings_per_side".into(),
+                value: p.outer_buildings_per_side as f64,
+                reason: "must be between 1 and 100",
+            });
+        }
+        check_positive("street_width_m", p.street_width_m)?;
+        let side_length = p.path_side_m + 2.0 * p.clearance_m;
+        let streets = (p.outer_buildings_per_side - 1) as f64 * p.street_width_m;
+        if streets >= side_length {
+            return Err(MapError::InvalidParameter {
+                field: "street_width_m".into(),
+                value: p.street_width_m,
+                reason: "the streets leave no room for the outer buildings",
+            });
         }
         if 2.0 * p.clearance_m >= p.path_side_m {
             return Err(MapError::InvalidParameter {
@@ -336,18 +361,38 @@ impl Buildings {
         };
         block(&mut b, [c, s - c], [c, s - c], p.central_height_m, central)?;
         let [h_n, h_e, h_s, h_w] = p.outer_heights_m;
-        block(&mut b, [s + c, s + c + d], [-c, s + c], h_n, opaque)?;
+        // each outer side split into `outer_buildings_per_side` buildings along it
+        let n = p.outer_buildings_per_side;
+        let w = p.street_width_m;
+        let pieces = |from: f64, to: f64| -> Vec<[f64; 2]> {
+            let len = (to - from - (n - 1) as f64 * w) / n as f64;
+            (0..n)
+                .map(|k| {
+                    let a = from + k as f64 * (len + w);
+                    [a, a + len]
+                })
+                .collect()
+        };
+        for e in pieces(-c, s + c) {
+            block(&mut b, [s + c, s + c + d], e, h_n, opaque)?;
+        }
         let east = FaceMaterials {
             west: glass,
             ..opaque
         };
-        block(&mut b, [0.0, s], [s + c, s + c + d], h_e, east)?;
+        for nn in pieces(0.0, s) {
+            block(&mut b, nn, [s + c, s + c + d], h_e, east)?;
+        }
         let south = FaceMaterials {
             north: glass,
             ..opaque
         };
-        block(&mut b, [-c - d, -c], [-c, s + c], h_s, south)?;
-        block(&mut b, [0.0, s], [-c - d, -c], h_w, opaque)?;
+        for e in pieces(-c, s + c) {
+            block(&mut b, [-c - d, -c], e, h_s, south)?;
+        }
+        for nn in pieces(0.0, s) {
+            block(&mut b, nn, [-c - d, -c], h_w, opaque)?;
+        }
         Ok(b.build()?.0)
     }
 }
@@ -439,5 +484,59 @@ mod tests {
         };
         let mesh = all_opaque.check().unwrap().mesh().unwrap();
         assert!(mesh.materials().iter().all(|&m| m == Material::Opaque));
+    }
+
+    /// Outer sides split by cross streets: a beam along a street passes the ring,
+    /// one beside it hits a building; one building per side is the default mesh.
+    #[test]
+    fn outer_buildings_split_by_streets() {
+        let one = BuildingsParams::default();
+        assert_eq!(
+            BuildingsParams {
+                outer_buildings_per_side: 1,
+                street_width_m: 3.0,
+                ..one
+            }
+            .check()
+            .unwrap()
+            .mesh()
+            .unwrap(),
+            one.check().unwrap().mesh().unwrap()
+        );
+        let three = BuildingsParams {
+            outer_buildings_per_side: 3,
+            ..one
+        }
+        .check()
+        .unwrap();
+        let mesh = three.mesh().unwrap();
+        assert!(mesh.len() > one.check().unwrap().mesh().unwrap().len());
+        let cast = BvhCaster::new(&mesh);
+        // the west side (north 0..100, west of the path) in pieces of (100 - 20) / 3
+        let len = 80.0 / 3.0;
+        let street = len + 5.0;
+        let from = Vector3::new(street, 0.0, -20.0);
+        assert!(cast.cast(&from, &-Vector3::y(), 40.0).is_none());
+        let hit = cast
+            .cast(&Vector3::new(len / 2.0, 0.0, -20.0), &-Vector3::y(), 40.0)
+            .unwrap();
+        assert_relative_eq!(hit.range, 15.0, epsilon = 1e-9);
+        for bad in [
+            BuildingsParams {
+                outer_buildings_per_side: 0,
+                ..one
+            },
+            BuildingsParams {
+                outer_buildings_per_side: 20,
+                street_width_m: 10.0,
+                ..one
+            },
+            BuildingsParams {
+                street_width_m: -1.0,
+                ..one
+            },
+        ] {
+            assert!(bad.check().is_err(), "{bad:?}");
+        }
     }
 }

@@ -6,6 +6,7 @@ pub mod common;
 pub mod fusion;
 pub mod noise;
 pub mod plaza;
+pub mod urban;
 pub mod vkf;
 
 use crate::experiment::DynExperiment;
@@ -20,5 +21,6 @@ pub fn registry() -> Vec<&'static dyn DynExperiment> {
         &beacons::Beacons,
         &vkf::Vkf,
         &plaza::Plaza,
+        &urban::Urban,
     ]
 }
