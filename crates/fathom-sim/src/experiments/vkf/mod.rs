@@ -14,8 +14,8 @@
 mod analysis;
 mod figures;
 mod report;
-mod scenario;
-mod sim;
+pub(crate) mod scenario;
+pub(crate) mod sim;
 
 use rand_chacha::ChaCha8Rng;
 
