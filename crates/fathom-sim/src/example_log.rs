@@ -165,7 +165,7 @@ pub fn range_beacon_example(
     let mut truth = Vec::new();
     let heading_sigma = 0.5f64.to_radians();
     for k in 1..=steps {
-        let t = k as f64 * 0.1;
+        let t = k as f64 / 10.0;
         let p = pos(t);
         head.push((t, wrap_pi(heading(t) + gauss(&mut rng, heading_sigma))));
         if k % 2 == 0 {

@@ -10,9 +10,12 @@
 //!   ground truth;
 //! - [`ins_dvl`]: INS / DVL navigation on one's own log (PINS, INS-DVL, gated
 //!   INS-DVL, the RPM velocity filter, the 15-state ESKF);
-//! - [`consistency`]: the NIS summaries a replay without ground truth reports.
+//! - [`consistency`]: the NIS summaries a replay without ground truth reports;
+//! - [`own_log`]: the front end of `fathom replay range-beacon|ins-dvl <dir>`
+//!   (settings, log, replay, the output texts).
 
 pub mod consistency;
 pub mod ins_dvl;
+pub mod own_log;
 pub mod plaza;
 pub mod range_beacon;
