@@ -304,7 +304,7 @@ fn range_beacon_outputs(r: &range_beacon::RangeBeaconReplay, header: &str) -> Ow
     );
     // estimates.csv
     let mut head = vec!["time[s]".to_string()];
-    if let Some(_t) = &r.truth {
+    if r.truth.is_some() {
         head.extend(["true_north[m]".into(), "true_east[m]".into()]);
         if r.truth_down.is_some() {
             head.push("true_down[m]".into());

@@ -5,7 +5,7 @@
 //!
 //! - Wheel-odometry logs run through the Plaza replay's engine
 //!   ([`crate::replay::plaza::trace_variant`]): the same events, filters and numbers,
-//!   so a Plaza log converted into the layout (`fathom convert plaza`) replays to the
+//!   so a Plaza log converted into the layout (`fathom log from-plaza`) replays to the
 //!   `plaza` experiment's numbers;
 //! - DVL + heading logs run the 4-state beacon EKF with depth ([`dvl`]).
 //!
