@@ -33,22 +33,32 @@ pub const INS_DVL_PRESET: &str = include_str!("../../../../scenarios/ins-dvl.tom
 pub enum OwnLogError {
     /// The log folder or one of its files (the user's data): names file, line, column.
     #[error(transparent)]
-    Log(#[from] LogError),
+    Log(Box<LogError>),
     /// The settings file or a log that cannot be replayed as asked (the user's).
     #[error("{0}")]
-    Input(SimError),
+    Input(Box<SimError>),
     /// The replay itself failed (an estimator or statistics error).
     #[error("{0}")]
-    Replay(SimError),
+    Replay(Box<SimError>),
+}
+
+impl From<LogError> for OwnLogError {
+    fn from(e: LogError) -> Self {
+        Self::Log(Box::new(e))
+    }
 }
 
 impl OwnLogError {
+    fn input(e: SimError) -> Self {
+        Self::Input(Box::new(e))
+    }
+
     fn from_replay(e: SimError) -> Self {
         match e {
             SimError::Invalid { .. } | SimError::InvalidArgument { .. } | SimError::Toml { .. } => {
-                Self::Input(e)
+                Self::input(e)
             }
-            other => Self::Replay(other),
+            other => Self::Replay(Box::new(other)),
         }
     }
 
@@ -97,7 +107,7 @@ pub fn replay_dir(
     };
     match kind {
         LogKind::RangeBeacon => {
-            let s = range_beacon::parse_settings(settings, label).map_err(OwnLogError::Input)?;
+            let s = range_beacon::parse_settings(settings, label).map_err(OwnLogError::input)?;
             let log = RangeBeaconLog::read_dir(dir)?;
             let r = range_beacon::replay(&log, &s).map_err(OwnLogError::from_replay)?;
             let rows = format!(
@@ -107,7 +117,7 @@ pub fn replay_dir(
             Ok(range_beacon_outputs(&r, &header(rows)))
         }
         LogKind::InsDvl => {
-            let s = ins_dvl::parse_settings(settings, label).map_err(OwnLogError::Input)?;
+            let s = ins_dvl::parse_settings(settings, label).map_err(OwnLogError::input)?;
             let log = InsDvlLog::read_dir(dir)?;
             let r = ins_dvl::replay(&log, &s).map_err(OwnLogError::from_replay)?;
             let rows = format!(
