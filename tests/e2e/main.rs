@@ -16,6 +16,7 @@ mod hardening;
 mod imu_allan;
 mod map_aided;
 mod noise;
+mod own_logs;
 mod pils;
 mod plaza;
 mod quadrotor_ins;

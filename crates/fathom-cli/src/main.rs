@@ -5,6 +5,10 @@
 //! fathom check <scenario.toml>
 //! fathom list
 //! fathom replay plaza <DIR> [--config FILE] [--out DIR]
+//! fathom replay range-beacon|ins-dvl <DIR> [--config FILE] [--out DIR]
+//! fathom log example range-beacon|ins-dvl <DIR> [--duration S] [--seed S] [--no-truth]
+//! fathom log from-plaza <PLAZA_DIR> <DIR>
+//! fathom log check <DIR>
 //! ```
 //!
 //! `run` runs any scenario file of a registered experiment (the file's top-level
@@ -29,6 +33,14 @@
 //! `report.md` and SVG figures into `--out` (default `plaza-replay`). Settings come
 //! from `--config` or, by default, the built-in copy of `scenarios/plaza.toml`.
 //!
+//! `replay range-beacon` and `replay ins-dvl` replay one's own log, a folder in
+//! fathom's CSV layout (`docs/own-data.md`), with the methods of `--config` (default:
+//! the built-in `scenarios/range-beacon.toml` / `scenarios/ins-dvl.toml`), and write
+//! `report.md`, `summary.json`, `estimates.csv` and `innovations.csv` into `--out`
+//! (default `<kind>-replay`). `log example` writes a simulated log of either kind,
+//! `log from-plaza` converts a CMU Plaza data set into the layout, `log check` reads
+//! every file of a log and reports the first error (file, line, column).
+//!
 //! Exit codes: 0 success, 2 usage or configuration error (bad arguments, unreadable or
 //! invalid settings file, data folder missing), 1 a failure while running (a data file
 //! that cannot be read or is malformed, an estimator or output error). Errors are
@@ -42,10 +54,17 @@ use std::process::ExitCode;
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
+use fathom_sim::data::layout::convert::range_beacon_from_plaza;
+use fathom_sim::data::layout::ins_dvl::InsDvlLog;
+use fathom_sim::data::layout::range_beacon::RangeBeaconLog;
+use fathom_sim::data::layout::{FileSet, LogKind, Manifest, write_log};
+use fathom_sim::data::plaza::PlazaLog;
 use fathom_sim::driver::campaign::{merge, run_shard, slurm_script};
+use fathom_sim::example_log::{ins_dvl_example, range_beacon_example};
 use fathom_sim::experiment::{Environment, Job, Shard};
 use fathom_sim::experiments::plaza::Plaza;
 use fathom_sim::progress::{Progress, ProgressEvent};
+use fathom_sim::replay::own_log::{OwnLogError, preset, replay_dir, write_outputs};
 use fathom_sim::replay::plaza::parse_settings;
 use fathom_sim::user_run::{
     RunOptions, check_command, check_scenario, one_line, peek_experiment, run_scenario_text,
@@ -76,6 +95,9 @@ enum Command {
     Check(CheckArgs),
     /// List the experiments, estimators, update schemes and sensors.
     List,
+    /// Logs in fathom's CSV layout (docs/own-data.md): examples, conversion, checks.
+    #[command(subcommand)]
+    Log(LogCmd),
     /// Merge the shard folders of a campaign (`fathom run --shard K/M`) into the
     /// outputs of one run.
     Merge(MergeArgs),
@@ -175,6 +197,83 @@ struct CheckArgs {
 enum ReplayData {
     /// CMU Plaza range-only data: wheel odometry, ranges to radio beacons, ground truth.
     Plaza(PlazaArgs),
+    /// Your own range-beacon log (fathom's CSV layout, docs/own-data.md).
+    RangeBeacon(OwnArgs),
+    /// Your own INS / DVL log (fathom's CSV layout, docs/own-data.md).
+    InsDvl(OwnArgs),
+}
+
+#[derive(Debug, Args)]
+struct OwnArgs {
+    /// The log folder (`log.toml` and the CSV files).
+    dir: PathBuf,
+    /// Settings and methods (TOML, the schema of `scenarios/range-beacon.toml` or
+    /// `scenarios/ins-dvl.toml`); default: built in.
+    #[arg(long, value_name = "FILE")]
+    config: Option<PathBuf>,
+    /// Output folder (default `range-beacon-replay` / `ins-dvl-replay`).
+    #[arg(long, value_name = "DIR")]
+    out: Option<PathBuf>,
+}
+
+/// The two kinds of log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum KindArg {
+    /// Range-beacon localization.
+    RangeBeacon,
+    /// INS / DVL navigation.
+    InsDvl,
+}
+
+impl KindArg {
+    fn kind(self) -> LogKind {
+        match self {
+            KindArg::RangeBeacon => LogKind::RangeBeacon,
+            KindArg::InsDvl => LogKind::InsDvl,
+        }
+    }
+}
+
+#[derive(Debug, Subcommand)]
+enum LogCmd {
+    /// Write a simulated example log (to see a valid log, or to try `fathom replay`).
+    Example(ExampleArgs),
+    /// Convert a CMU Plaza data set (`*_DR.txt`, `*_TD.txt`, `*_.mat`) into a
+    /// range-beacon log.
+    FromPlaza(FromPlazaArgs),
+    /// Read every file of a log folder and report the first error (file, line, column).
+    Check(LogCheckArgs),
+}
+
+#[derive(Debug, Args)]
+struct ExampleArgs {
+    /// Which kind of log.
+    kind: KindArg,
+    /// The new log folder (must not hold a log).
+    dir: PathBuf,
+    /// Length of the log, s.
+    #[arg(long, value_name = "S", default_value_t = 300.0)]
+    duration: f64,
+    /// Seed of the simulated noise.
+    #[arg(long, value_name = "S", default_value_t = 1)]
+    seed: u64,
+    /// Leave out `truth.csv` (the replay then reports innovations only).
+    #[arg(long)]
+    no_truth: bool,
+}
+
+#[derive(Debug, Args)]
+struct FromPlazaArgs {
+    /// Folder holding the Plaza data set's files.
+    plaza_dir: PathBuf,
+    /// The new log folder.
+    dir: PathBuf,
+}
+
+#[derive(Debug, Args)]
+struct LogCheckArgs {
+    /// The log folder.
+    dir: PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -309,6 +408,131 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
     }
     text.push_str(&format!("\noutputs: {}\n", args.out.display()));
     Ok(text)
+}
+
+fn own_failure(e: OwnLogError) -> Failure {
+    let users = e.is_users();
+    let e = anyhow!(one_line(&error_chain(&e)));
+    if users {
+        Failure::Usage(e)
+    } else {
+        Failure::Run(e)
+    }
+}
+
+fn replay_own(kind: LogKind, args: &OwnArgs) -> Result<String, Failure> {
+    let (text, label) = match &args.config {
+        None => (
+            preset(kind).to_string(),
+            format!("built-in scenarios/{}.toml", kind.name()),
+        ),
+        Some(path) => {
+            let label = path.display().to_string();
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read settings file `{label}`"))
+                .map_err(Failure::Usage)?;
+            (text, label)
+        }
+    };
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from(format!("{}-replay", kind.name())));
+    let r = replay_dir(kind, &args.dir, &text, &label).map_err(own_failure)?;
+    write_outputs(&out, &r.files).map_err(|e| Failure::Run(anyhow!(one_line(&error_chain(&e)))))?;
+    Ok(format!(
+        "{}
+outputs: {}
+",
+        r.console,
+        out.display()
+    ))
+}
+
+fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
+    let usage =
+        |e: &(dyn std::error::Error + 'static)| Failure::Usage(anyhow!(one_line(&error_chain(e))));
+    match cmd {
+        LogCmd::Example(a) => {
+            let kind = a.kind.kind();
+            let files = match kind {
+                LogKind::RangeBeacon => range_beacon_example(a.duration, a.seed, !a.no_truth)
+                    .map_err(|e| usage(&e))?
+                    .to_files(),
+                LogKind::InsDvl => ins_dvl_example(a.duration, a.seed, !a.no_truth)
+                    .map_err(|e| usage(&e))?
+                    .to_files(),
+            };
+            let about = format!(
+                "simulated example ({} s, seed {}{}) written by `fathom log example`",
+                a.duration,
+                a.seed,
+                if a.no_truth { ", no truth" } else { "" }
+            );
+            write_log(&a.dir, &Manifest::new(kind, about), &files).map_err(|e| usage(&e))?;
+            Ok(format!(
+                "wrote a {} log into {} ({}); replay it with `fathom replay {} {}`\n",
+                kind.name(),
+                a.dir.display(),
+                files.iter().map(|f| f.0).collect::<Vec<_>>().join(", "),
+                kind.name(),
+                a.dir.display()
+            ))
+        }
+        LogCmd::FromPlaza(a) => {
+            let settings = parse_settings(
+                <Plaza as Experiment>::PRESET,
+                "built-in scenarios/plaza.toml",
+            )
+            .map_err(|e| Failure::Run(anyhow!(e)))?;
+            if !a.plaza_dir.is_dir() {
+                return Err(Failure::Usage(anyhow!(
+                    "cannot read the Plaza data: `{}` is not a folder",
+                    a.plaza_dir.display()
+                )));
+            }
+            let log =
+                PlazaLog::read_dir(&a.plaza_dir, settings.range_order).map_err(|e| usage(&e))?;
+            let rb = range_beacon_from_plaza(&log);
+            let about = format!(
+                "CMU Plaza data converted from `{}` by `fathom log from-plaza`",
+                a.plaza_dir.display()
+            );
+            write_log(
+                &a.dir,
+                &Manifest::new(LogKind::RangeBeacon, about),
+                &rb.to_files(),
+            )
+            .map_err(|e| usage(&e))?;
+            Ok(format!(
+                "wrote a range-beacon log into {}; replay it with `fathom replay range-beacon {} \
+                 --config scenarios/range-beacon-plaza.toml`\n",
+                a.dir.display(),
+                a.dir.display()
+            ))
+        }
+        LogCmd::Check(a) => {
+            let set = FileSet::read_dir(&a.dir).map_err(|e| usage(&e))?;
+            let kind = set.manifest.kind;
+            let rows = match kind {
+                LogKind::RangeBeacon => {
+                    let l = RangeBeaconLog::parse(&set).map_err(|e| usage(&e))?;
+                    format!("{} beacons, {} ranges", l.beacons.len(), l.ranges.len())
+                }
+                LogKind::InsDvl => {
+                    let l = InsDvlLog::parse(&set).map_err(|e| usage(&e))?;
+                    format!("{} IMU rows, {} DVL rows", l.imu.len(), l.dvl.len())
+                }
+            };
+            Ok(format!(
+                "ok: {} is a valid {} log ({}: {rows}; truth: {})\n",
+                a.dir.display(),
+                kind.name(),
+                set.files.keys().copied().collect::<Vec<_>>().join(", "),
+                if set.has("truth.csv") { "yes" } else { "no" }
+            ))
+        }
+    }
 }
 
 fn usage_or_run(e: SimError) -> Failure {
@@ -473,6 +697,10 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
             Failure::Run(e)
         }
     })?;
+    if let Some(reason) = &result.skipped {
+        // A scenario whose data folder is absent is the user's error, not an empty report.
+        return Err(Failure::Usage(anyhow!("{}: {reason}", info.experiment)));
+    }
     let s = &result.summary;
     let mut text = format!(
         "{} ({}): {} runs, base seed {}, {:.1} s, fathom {}\n",
@@ -582,6 +810,17 @@ fn list_cmd() -> String {
     for (name, doc) in SCHEMES {
         text.push_str(&format!("  {name:<16} {doc}\n"));
     }
+    text.push_str(
+        "own logs (fathom replay <kind> <dir>; docs/own-data.md; methods chosen in the \
+         settings' [[methods]] list):\n",
+    );
+    text.push_str(
+        "  range-beacon     filter = \"dead-reckoning\" | \"ekf\" with scheme = \"AS\" | \"SC\" | \"SI\", \
+         calibration = \"none\" | \"offset\" | \"affine\", outliers = \"robust\" | \"gate\"\n",
+    );
+    text.push_str(
+        "  ins-dvl          filter = \"pins\" | \"ins-dvl\" | \"vkf\" | \"eskf\" (gate_probability for a gated filter)\n",
+    );
     text.push_str("sensors:\n");
     for (name, doc) in SENSORS {
         text.push_str(&format!("  {name:<16} {doc}\n"));
@@ -645,6 +884,9 @@ const SENSORS: &[(&str, &str)] = &[
 fn run(cli: &Cli) -> Result<String, Failure> {
     match &cli.command {
         Command::Replay(ReplayData::Plaza(args)) => replay_plaza(args),
+        Command::Replay(ReplayData::RangeBeacon(args)) => replay_own(LogKind::RangeBeacon, args),
+        Command::Replay(ReplayData::InsDvl(args)) => replay_own(LogKind::InsDvl, args),
+        Command::Log(cmd) => log_cmd(cmd),
         Command::Run(args) => run_scenario_cmd(args),
         Command::Check(args) => check_cmd(args),
         Command::List => Ok(list_cmd()),
@@ -774,7 +1016,17 @@ mod tests {
             Command::List
         ));
         let l = list_cmd();
-        for name in ["fusion", "noise", "beacons", "vkf", "plaza", "SC", "dvl"] {
+        for name in [
+            "fusion",
+            "noise",
+            "beacons",
+            "vkf",
+            "plaza",
+            "SC",
+            "dvl",
+            "range-beacon",
+            "eskf",
+        ] {
             assert!(l.contains(name), "{l}");
         }
     }

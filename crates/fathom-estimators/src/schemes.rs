@@ -282,6 +282,9 @@ pub struct Decision {
     pub disposition: Disposition,
     /// The gating statistic `nu^2 / S` when it was computed.
     pub nis: Option<f64>,
+    /// The innovation `nu = z - h(x)` (residual of the measurement model) when it was
+    /// computed, with `nis`: what a replay without ground truth reports.
+    pub innovation: Option<f64>,
 }
 
 /// Per-channel counts of the dispositions.
@@ -537,7 +540,13 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
         self.ekf.predict_to(time)
     }
 
-    fn log(&mut self, obs: &Observation<S>, applied_at: Time, d: Disposition, nis: Option<f64>) {
+    fn log(
+        &mut self,
+        obs: &Observation<S>,
+        applied_at: Time,
+        d: Disposition,
+        stat: Option<(f64, f64)>,
+    ) {
         let c = &mut self.counts[obs.channel];
         match d {
             Disposition::Accepted => c.accepted += 1,
@@ -553,7 +562,8 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
             applied_at,
             value: obs.value,
             disposition: d,
-            nis,
+            nis: stat.map(|s| s.0),
+            innovation: stat.map(|s| s.1),
         });
     }
 
@@ -564,7 +574,7 @@ impl<const N: usize, M: MotionModel<N>, S: ScalarModel<N> + Clone> SchemeFilter<
             } else {
                 Disposition::Rejected
             };
-            self.log(o, at, d, Some(out.nis));
+            self.log(o, at, d, Some((out.nis, out.innovation)));
         }
     }
 

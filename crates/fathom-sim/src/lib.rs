@@ -47,8 +47,10 @@
 pub mod data;
 pub mod driver;
 pub mod error;
+pub mod example_log;
 pub mod experiment;
 pub mod experiments;
+pub mod method_list;
 pub mod montecarlo;
 pub mod output;
 pub mod plot;

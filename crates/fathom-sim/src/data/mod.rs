@@ -7,8 +7,13 @@
 //!   writing numeric matrices as an uncompressed MATLAB v5 file (tests and tools that
 //!   need to make a modified copy of a `.mat` file).
 //!
+//! - [`layout`]: fathom's own CSV layout for users' logs (`docs/own-data.md`): a
+//!   folder with `log.toml` and one CSV file per sensor, header with units, for
+//!   range-beacon localization and INS / DVL navigation.
+//!
 //! Every error names the file and, for text files, the 1-based line (for `.mat`
-//! matrices, the matrix and its 1-based row).
+//! matrices, the matrix and its 1-based row; for the CSV layout also the column).
 
+pub mod layout;
 pub mod matv5;
 pub mod plaza;

@@ -15,8 +15,8 @@
 mod analysis;
 mod figures;
 mod report;
-mod scenario;
-mod sim;
+pub(crate) mod scenario;
+pub(crate) mod sim;
 mod smoothed;
 
 use rand_chacha::ChaCha8Rng;

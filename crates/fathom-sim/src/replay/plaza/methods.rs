@@ -6,7 +6,9 @@ use fathom_estimators::{
     GateThreshold,
     ekf::Ekf,
     robust::{RecoveryParams, RobustParams},
-    schemes::{ChannelCounts, Disposition, Event, Observation, SchemeFilter, SchemeParams},
+    schemes::{
+        ChannelCounts, Decision, Disposition, Event, Observation, SchemeFilter, SchemeParams,
+    },
     wheel_odometry::{CalibratedRange, OdometryRate, WheelOdometry, WheelOdometryParams},
 };
 use fathom_stats::RunStats;
@@ -73,6 +75,33 @@ pub struct SmoothedRun {
     /// Bytes the forward pass holds per step
     /// ([`fathom_estimators::smoother::ForwardStep::BYTES`] for the filter's state size).
     pub bytes_per_step: usize,
+}
+
+/// What a method produced at the evaluation instants, before it is scored against
+/// ground truth: shared by the Plaza replay ([`run_dead_reckoning`], [`run_variant`])
+/// and the `range-beacon` replay of a CSV log, which may have no truth.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trace {
+    /// Estimated `(x, y)` at the evaluation instants, m.
+    pub est: Vec<[f64; 2]>,
+    /// Estimated heading at the evaluation instants, rad.
+    pub heading: Vec<f64>,
+    /// `sqrt(P_xx + P_yy)` at the evaluation instants, m.
+    pub pos_sigma: Vec<f64>,
+    /// Estimated range offset and scale error at the evaluation instants (0 when not
+    /// estimated).
+    pub calibration: Vec<[f64; 2]>,
+    /// Dispositions of the ranges, summed over the channels (zero for dead reckoning).
+    pub counts: ChannelCounts,
+    /// Ranges applied with an inflated variance (Huber).
+    pub downweighted: usize,
+    /// Covariance inflations after runs of rejected or down-weighted ranges.
+    pub recoveries: usize,
+    /// Every range decision in processing order, with its innovation and NIS (empty
+    /// for dead reckoning).
+    pub decisions: Vec<Decision>,
+    /// The RTS-smoothed estimates (`smooth = true`; `None` for dead reckoning).
+    pub smoothed: Option<SmoothedRun>,
 }
 
 fn finish(
@@ -146,6 +175,15 @@ fn motion(s: &PlazaSettings, cal: Calibration) -> Result<WheelOdometry, SimError
 /// # Errors
 /// [`SimError::Model`] wrapping estimator errors.
 pub fn run_dead_reckoning(prep: &PreparedLog, s: &PlazaSettings) -> Result<MethodRun, SimError> {
+    let t = trace_dead_reckoning(prep, s)?;
+    finish("DR".into(), None, prep, t.est, t.pos_sigma, t.calibration)
+}
+
+/// [`run_dead_reckoning`] before scoring: the trace at the evaluation instants.
+///
+/// # Errors
+/// [`SimError::Model`] wrapping estimator errors.
+pub fn trace_dead_reckoning(prep: &PreparedLog, s: &PlazaSettings) -> Result<Trace, SimError> {
     let ctx = |e| SimError::model("dead reckoning", e);
     let mut ekf = Ekf::<3, _>::new(
         prior::<3>(prep, s, Calibration::None)?,
@@ -156,6 +194,7 @@ pub fn run_dead_reckoning(prep: &PreparedLog, s: &PlazaSettings) -> Result<Metho
     .map_err(ctx)?;
     let mut est = Vec::with_capacity(prep.eval.len());
     let mut sig = Vec::with_capacity(prep.eval.len());
+    let mut heading = Vec::with_capacity(prep.eval.len());
     for (t, kind) in prep.events(false) {
         ekf.predict_to(t).map_err(ctx)?;
         match kind {
@@ -163,21 +202,31 @@ pub fn run_dead_reckoning(prep: &PreparedLog, s: &PlazaSettings) -> Result<Metho
             Kind::Eval(_) => {
                 let (x, p) = (ekf.state(), ekf.covariance());
                 est.push([x[0], x[1]]);
+                heading.push(x[2]);
                 sig.push((p[(0, 0)] + p[(1, 1)]).sqrt());
             }
             Kind::Range(_) => {}
         }
     }
     let n = est.len();
-    finish("DR".into(), None, prep, est, sig, vec![[0.0, 0.0]; n])
+    Ok(Trace {
+        est,
+        heading,
+        pos_sigma: sig,
+        calibration: vec![[0.0, 0.0]; n],
+        counts: ChannelCounts::default(),
+        downweighted: 0,
+        recoveries: 0,
+        decisions: Vec::new(),
+        smoothed: None,
+    })
 }
 
 fn run_filter<const N: usize>(
     prep: &PreparedLog,
     s: &PlazaSettings,
     v: &Variant,
-    n_log_ranges: usize,
-) -> Result<MethodRun, SimError> {
+) -> Result<Trace, SimError> {
     let ctx = |e| SimError::model(format!("filter `{}`", v.name), e);
     let cal = v.calibration;
     let ekf = Ekf::<N, _>::new(
@@ -228,6 +277,7 @@ fn run_filter<const N: usize>(
     };
     let mut est = Vec::with_capacity(prep.eval.len());
     let mut sig = Vec::with_capacity(prep.eval.len());
+    let mut heading = Vec::with_capacity(prep.eval.len());
     let mut calib = Vec::with_capacity(prep.eval.len());
     let mut steps = Vec::new();
     let mut events = prep
@@ -262,6 +312,7 @@ fn run_filter<const N: usize>(
         |_, _, f| {
             let (x, p) = (f.ekf().state(), f.ekf().covariance());
             est.push([x[0], x[1]]);
+            heading.push(x[2]);
             sig.push((p[(0, 0)] + p[(1, 1)]).sqrt());
             calib.push([
                 offset_state.map_or(0.0, |i| x[i]),
@@ -283,23 +334,17 @@ fn run_filter<const N: usize>(
     } else {
         None
     };
-    let mut run = finish(v.name.clone(), Some(v.clone()), prep, est, sig, calib)?;
-    run.smoothed = smoothed;
-    let total = ChannelCounts::total(filter.counts());
-    run.accepted = total.accepted;
-    run.rejected = total.rejected;
-    run.dropped = total.stale + total.superseded;
-    run.non_finite = total.non_finite;
-    let mut decisions = vec![None; n_log_ranges];
-    for d in filter.decisions() {
-        if let Some(slot) = decisions.get_mut(d.tag) {
-            *slot = Some(d.disposition);
-        }
-    }
-    run.decisions = decisions;
-    run.downweighted = filter.downweighted();
-    run.recoveries = filter.recoveries();
-    Ok(run)
+    Ok(Trace {
+        est,
+        heading,
+        pos_sigma: sig,
+        calibration: calib,
+        counts: ChannelCounts::total(filter.counts()),
+        downweighted: filter.downweighted(),
+        recoveries: filter.recoveries(),
+        decisions: filter.decisions().to_vec(),
+        smoothed,
+    })
 }
 
 /// The RTS smoother over `filter`'s recorded pass, read at the evaluation steps.
@@ -347,9 +392,45 @@ pub fn run_variant(
     v: &Variant,
     n_log_ranges: usize,
 ) -> Result<MethodRun, SimError> {
+    let t = trace_variant(prep, s, v)?;
+    let mut run = finish(
+        v.name.clone(),
+        Some(v.clone()),
+        prep,
+        t.est,
+        t.pos_sigma,
+        t.calibration,
+    )?;
+    run.accepted = t.counts.accepted;
+    run.rejected = t.counts.rejected;
+    run.dropped = t.counts.stale + t.counts.superseded;
+    run.non_finite = t.counts.non_finite;
+    let mut decisions = vec![None; n_log_ranges];
+    for d in &t.decisions {
+        if let Some(slot) = decisions.get_mut(d.tag) {
+            *slot = Some(d.disposition);
+        }
+    }
+    run.decisions = decisions;
+    run.downweighted = t.downweighted;
+    run.recoveries = t.recoveries;
+    run.smoothed = t.smoothed;
+    Ok(run)
+}
+
+/// [`run_variant`] before scoring: the trace at the evaluation instants and every
+/// range decision.
+///
+/// # Errors
+/// [`SimError::Model`] wrapping estimator errors.
+pub fn trace_variant(
+    prep: &PreparedLog,
+    s: &PlazaSettings,
+    v: &Variant,
+) -> Result<Trace, SimError> {
     match v.calibration {
-        Calibration::None => run_filter::<3>(prep, s, v, n_log_ranges),
-        Calibration::Offset => run_filter::<4>(prep, s, v, n_log_ranges),
-        Calibration::Affine => run_filter::<5>(prep, s, v, n_log_ranges),
+        Calibration::None => run_filter::<3>(prep, s, v),
+        Calibration::Offset => run_filter::<4>(prep, s, v),
+        Calibration::Affine => run_filter::<5>(prep, s, v),
     }
 }

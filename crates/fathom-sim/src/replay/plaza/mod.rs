@@ -30,11 +30,14 @@
 mod methods;
 mod prepare;
 mod ranges;
-mod settings;
+pub(crate) mod settings;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 
-pub use methods::{MethodRun, SmoothedRun, run_dead_reckoning, run_variant};
+pub use methods::{
+    MethodRun, SmoothedRun, Trace, run_dead_reckoning, run_variant, trace_dead_reckoning,
+    trace_variant,
+};
 pub use prepare::{PreparedLog, PreparedRange};
 pub use ranges::{RangeAnalysis, analyse_ranges, truth_at};
 pub use settings::{

@@ -55,57 +55,79 @@ impl PreparedLog {
     /// [`SimError::Model`] for an odometry row whose rate cannot be formed.
     pub fn new(log: &PlazaLog) -> Result<Self, SimError> {
         let gt0 = log.ground_truth[0];
-        let t0 = gt0.time;
-        let start = [gt0.x, gt0.y, log.dr_path[0].heading];
-        let mut inputs = Vec::with_capacity(log.odometry.len() + 1);
+        Self::from_rows(
+            gt0.time,
+            [gt0.x, gt0.y, log.dr_path[0].heading],
+            log.odometry
+                .iter()
+                .map(|s| (s.time, s.delta_distance, s.delta_heading)),
+            log.ranges.iter().map(|r| (r.time, r.beacon, r.range)),
+            log.ground_truth[1..].iter().map(|g| (g.time, g.x, g.y)),
+            log.beacons.iter().map(|b| Vector2::new(b.x, b.y)).collect(),
+        )
+    }
+
+    /// Prepares a log given as rows on absolute time (module docs of
+    /// [`crate::replay::plaza`]): the start `t0` and pose `(x, y, heading)`, odometry
+    /// `(time, distance, heading change)`, ranges `(time, beacon channel, range)` in
+    /// processing order (their position is the `index`), the evaluation instants
+    /// `(time, true x, true y)` (all after `t0`; NaN truth when the log has none) and
+    /// the beacon positions by channel. [`PreparedLog::new`] is this on a Plaza log;
+    /// the `range-beacon` replay of a CSV log calls it directly.
+    ///
+    /// # Errors
+    /// [`SimError::Model`] for an odometry row whose rate cannot be formed.
+    pub fn from_rows(
+        t0: f64,
+        start: [f64; 3],
+        odometry: impl IntoIterator<Item = (f64, f64, f64)>,
+        ranges: impl IntoIterator<Item = (f64, usize, f64)>,
+        eval: impl IntoIterator<Item = (f64, f64, f64)>,
+        beacons: Vec<Vector2<f64>>,
+    ) -> Result<Self, SimError> {
+        let odometry = odometry.into_iter();
+        let mut inputs = Vec::with_capacity(odometry.size_hint().0 + 1);
         let mut prev = 0.0;
         let mut skipped_odometry = 0;
-        for step in &log.odometry {
-            let t = step.time - t0;
+        for (time, delta_distance, delta_heading) in odometry {
+            let t = time - t0;
             if t <= 0.0 {
                 skipped_odometry += 1;
                 continue;
             }
-            let rate =
-                OdometryRate::from_increments(step.delta_distance, step.delta_heading, t - prev)
-                    .map_err(|e| {
-                        SimError::model(format!("odometry row at t = {} s", step.time), e)
-                    })?;
+            let rate = OdometryRate::from_increments(delta_distance, delta_heading, t - prev)
+                .map_err(|e| SimError::model(format!("odometry row at t = {time} s"), e))?;
             inputs.push((prev, rate));
             prev = t;
         }
         inputs.push((prev, OdometryRate::default()));
         let mut skipped_ranges = 0;
-        let ranges = log
-            .ranges
-            .iter()
+        let ranges = ranges
+            .into_iter()
             .enumerate()
-            .filter_map(|(index, r)| {
-                let time = r.time - t0;
+            .filter_map(|(index, (time, channel, value))| {
+                let time = time - t0;
                 if time <= 0.0 {
                     skipped_ranges += 1;
                     None
                 } else {
                     Some(PreparedRange {
                         time,
-                        channel: r.beacon,
-                        value: r.range,
+                        channel,
+                        value,
                         index,
                     })
                 }
             })
             .collect();
-        let eval = log.ground_truth[1..]
-            .iter()
-            .map(|g| (g.time - t0, g.x, g.y))
-            .collect();
+        let eval = eval.into_iter().map(|(t, x, y)| (t - t0, x, y)).collect();
         Ok(PreparedLog {
             t0,
             start,
             inputs,
             ranges,
             eval,
-            beacons: log.beacons.iter().map(|b| Vector2::new(b.x, b.y)).collect(),
+            beacons,
             skipped_odometry,
             skipped_ranges,
         })

@@ -259,7 +259,11 @@ pub struct PlazaSettings {
     pub hard_gate_sigma: f64,
 }
 
-fn scheme_from_name(file: &str, key: &str, name: &str) -> Result<UpdateScheme, SimError> {
+pub(crate) fn scheme_from_name(
+    file: &str,
+    key: &str,
+    name: &str,
+) -> Result<UpdateScheme, SimError> {
     UpdateScheme::ALL
         .into_iter()
         .find(|s| s.short_name() == name)

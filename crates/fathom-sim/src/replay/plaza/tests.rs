@@ -5,7 +5,7 @@ use crate::data::plaza::{OdometryStep, PlazaFiles, PoseRecord, RangeRecord};
 use fathom_estimators::schemes::UpdateScheme;
 use fathom_estimators::wheel_odometry::OdometryRate;
 
-fn preset() -> String {
+pub(crate) fn preset() -> String {
     std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/plaza.toml"),
     )
@@ -69,7 +69,7 @@ fn settings_parse_and_bad_values_name_the_key() {
 /// A synthetic log: a 60 m x 40 m loop driven at 1 m/s for 600 s, odometry with a
 /// 1 % distance scale error and a heading-rate bias, ranges `1.05 d + 0.4` with a
 /// deterministic +-0.3 m pattern, ground truth every odometry step.
-fn synthetic_log() -> PlazaLog {
+pub(crate) fn synthetic_log() -> PlazaLog {
     let t0 = 1000.0;
     let dt = 0.2;
     let beacons = vec![

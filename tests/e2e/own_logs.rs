@@ -1,0 +1,294 @@
+//! End-to-end tests of one's own logs through the real `fathom` binary: example logs
+//! of both kinds are generated (`fathom log example`), checked and replayed with and
+//! without ground truth; corrupted copies (NaN, time going backwards, a missing or an
+//! unknown column, a missing folder) exit with code 2 and one line naming the file,
+//! line and column; the CMU Plaza data converted into the layout replays to the
+//! `replay plaza` numbers (when `../shared/data/plaza1` exists).
+
+use std::path::Path;
+
+use fathom::sim::experiments::plaza::find_data_dir;
+
+use crate::support::{fathom, read, repo_root, scratch};
+
+fn ok(dir: &Path, args: &[&str]) -> String {
+    let r = fathom(dir, args);
+    assert_eq!(r.code, 0, "{args:?}: {}", r.stderr);
+    r.stdout
+}
+
+/// Runs `args`, expects exit code 2 and one error line containing every `want`.
+fn usage_error(dir: &Path, args: &[&str], want: &[&str]) {
+    let r = fathom(dir, args);
+    assert_eq!(
+        r.code, 2,
+        "{args:?}: stdout {} stderr {}",
+        r.stdout, r.stderr
+    );
+    let line = r.stderr.trim_end();
+    assert_eq!(line.lines().count(), 1, "{line}");
+    for w in want {
+        assert!(line.contains(w), "{args:?}: `{w}` not in {line}");
+    }
+}
+
+#[test]
+fn example_logs_replay_with_and_without_truth() {
+    let root = scratch("own-logs-replay");
+    ok(
+        &root,
+        &["log", "example", "range-beacon", "rb", "--duration", "120"],
+    );
+    ok(
+        &root,
+        &[
+            "log",
+            "example",
+            "range-beacon",
+            "rb-nt",
+            "--duration",
+            "120",
+            "--no-truth",
+        ],
+    );
+    ok(
+        &root,
+        &["log", "example", "ins-dvl", "ins", "--duration", "60"],
+    );
+    ok(
+        &root,
+        &[
+            "log",
+            "example",
+            "ins-dvl",
+            "ins-nt",
+            "--duration",
+            "60",
+            "--no-truth",
+        ],
+    );
+    assert!(ok(&root, &["log", "check", "rb"]).contains("valid range-beacon log"));
+    assert!(ok(&root, &["log", "check", "ins-nt"]).contains("truth: no"));
+    // Writing over an existing log is refused.
+    usage_error(
+        &root,
+        &["log", "example", "ins-dvl", "ins"],
+        &["exists already"],
+    );
+
+    let out = ok(&root, &["replay", "range-beacon", "rb", "--out", "o-rb"]);
+    assert!(
+        out.contains("mean [m]") && out.contains("mean NIS"),
+        "{out}"
+    );
+    let report = read(&root.join("o-rb"), "report.md");
+    assert!(
+        report.contains("Position error against `truth.csv` (3D, m)"),
+        "{report}"
+    );
+    // The filters beat dead reckoning on the example (DVL with a 1 % scale error).
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&root.join("o-rb"), "summary.json")).unwrap();
+    let mean = |name: &str| {
+        summary["methods"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|m| m["name"] == name)
+            .unwrap()["position_error_m"]["mean"]
+            .as_f64()
+            .unwrap()
+    };
+    for m in ["AS", "SC", "SI"] {
+        assert!(
+            mean(m) < mean("DR"),
+            "{m}: {} vs DR {}",
+            mean(m),
+            mean("DR")
+        );
+    }
+    let est = read(&root.join("o-rb"), "estimates.csv");
+    assert!(est.starts_with("time[s],true_north[m],true_east[m],true_down[m],DR_north[m]"));
+
+    let out = ok(
+        &root,
+        &["replay", "range-beacon", "rb-nt", "--out", "o-rb-nt"],
+    );
+    assert!(!out.contains("mean [m]") && out.contains("ranges"), "{out}");
+    let report = read(&root.join("o-rb-nt"), "report.md");
+    assert!(
+        report.contains("no `truth.csv`") && !report.contains("Position error"),
+        "{report}"
+    );
+    assert!(
+        read(&root.join("o-rb-nt"), "innovations.csv")
+            .lines()
+            .count()
+            > 100
+    );
+
+    let out = ok(&root, &["replay", "ins-dvl", "ins", "--out", "o-ins"]);
+    for m in ["PINS", "INS-DVL", "VKF", "ESKF"] {
+        assert!(out.contains(m), "{out}");
+    }
+    assert!(read(&root.join("o-ins"), "report.md").contains("Horizontal position error"));
+    let out = ok(&root, &["replay", "ins-dvl", "ins-nt", "--out", "o-ins-nt"]);
+    assert!(
+        out.contains("DVL velocity") && !out.contains("mean [m]"),
+        "{out}"
+    );
+
+    // Methods and their tuning come from a settings file; a bad one names the key and
+    // lists the valid filters.
+    let settings = std::fs::read_to_string(repo_root().join("scenarios/ins-dvl.toml")).unwrap();
+    let cut = settings[..settings.find("[[methods]]").unwrap()].to_string()
+        + "[[methods]]\nname = \"mine\"\nfilter = \"eskf\"\n";
+    std::fs::write(root.join("one.toml"), &cut).unwrap();
+    let out = ok(
+        &root,
+        &[
+            "replay", "ins-dvl", "ins", "--config", "one.toml", "--out", "o1",
+        ],
+    );
+    assert!(out.contains("mine") && !out.contains("PINS"), "{out}");
+    std::fs::write(root.join("bad.toml"), cut.replace("\"eskf\"", "\"ukf\"")).unwrap();
+    usage_error(
+        &root,
+        &["replay", "ins-dvl", "ins", "--config", "bad.toml"],
+        &["bad.toml", "methods[0].filter", "ukf", "eskf"],
+    );
+    // A log of the other kind.
+    usage_error(
+        &root,
+        &["replay", "ins-dvl", "rb"],
+        &["log.toml", "not a `ins-dvl` log"],
+    );
+}
+
+#[test]
+fn corrupted_logs_name_file_line_and_column() {
+    let root = scratch("own-logs-bad");
+    ok(
+        &root,
+        &["log", "example", "range-beacon", "good", "--duration", "30"],
+    );
+    let ranges = read(&root.join("good"), "ranges.csv");
+    let copy = |name: &str, file: &str, text: &str| {
+        let dir = root.join(name);
+        std::fs::create_dir_all(&dir).unwrap();
+        for f in std::fs::read_dir(root.join("good")).unwrap() {
+            let f = f.unwrap();
+            std::fs::copy(f.path(), dir.join(f.file_name())).unwrap();
+        }
+        std::fs::write(dir.join(file), text).unwrap();
+    };
+    let mut lines: Vec<String> = ranges.lines().map(String::from).collect();
+    assert_eq!(lines[0], "time[s],beacon,range[m]");
+    // Line 4 of the file: a NaN range.
+    let mut nan = lines.clone();
+    let cells: Vec<&str> = nan[3].split(',').collect();
+    nan[3] = format!("{},{},NaN", cells[0], cells[1]);
+    copy("nan", "ranges.csv", &(nan.join("\n") + "\n"));
+    // Line 6: a time before line 5's.
+    let t5: f64 = lines[4].split(',').next().unwrap().parse().unwrap();
+    let rest6: Vec<&str> = lines[5].split(',').collect();
+    lines[5] = format!("{},{},{}", t5 - 1.0, rest6[1], rest6[2]);
+    copy("time", "ranges.csv", &(lines.join("\n") + "\n"));
+    copy("missing", "ranges.csv", "time[s],range[m]\n1,2\n");
+    copy("unknown", "ranges.csv", "time[s],beacon,range[m],snr[dB]\n");
+    copy("stray", "range.csv", "time[s],beacon,range[m]\n");
+    let cases: [(&str, &[&str]); 6] = [
+        (
+            "nan",
+            &[
+                "ranges.csv` line 4, column 3 (`range[m]`)",
+                "`NaN` is not a finite number",
+            ],
+        ),
+        (
+            "time",
+            &[
+                "ranges.csv` line 6, column 1 (`time[s]`)",
+                "before the previous row's",
+            ],
+        ),
+        (
+            "missing",
+            &["ranges.csv` line 1", "missing column `beacon`"],
+        ),
+        (
+            "unknown",
+            &["ranges.csv` line 1, column 4", "unknown column `snr`"],
+        ),
+        ("stray", &["range.csv", "its files are"]),
+        ("no-such-log", &["no-such-log", "does not exist"]),
+    ];
+    for (dir, want) in cases {
+        usage_error(&root, &["replay", "range-beacon", dir], want);
+        usage_error(&root, &["log", "check", dir], want);
+    }
+    // Nothing was written for a refused log.
+    assert!(!root.join("range-beacon-replay").exists());
+    // Negative control: the untouched copy replays.
+    ok(&root, &["replay", "range-beacon", "good"]);
+}
+
+#[test]
+fn missing_plaza_folder_is_an_error_not_an_empty_report() {
+    let root = scratch("own-logs-plaza-missing");
+    let text = std::fs::read_to_string(repo_root().join("scenarios/plaza.toml"))
+        .unwrap()
+        .replace("dir = \"shared/data/plaza1\"", "dir = \"no/such/plaza\"");
+    std::fs::write(root.join("p.toml"), text).unwrap();
+    usage_error(&root, &["run", "p.toml", "--out", "o"], &["no/such/plaza"]);
+    usage_error(
+        &root,
+        &["replay", "plaza", "no/such/plaza"],
+        &["no/such/plaza"],
+    );
+    usage_error(
+        &root,
+        &["log", "from-plaza", "no/such/plaza", "x"],
+        &["no/such/plaza"],
+    );
+}
+
+#[test]
+fn plaza_through_the_layout_gives_the_plaza_numbers() {
+    let Some(plaza) = find_data_dir(&repo_root(), "shared/data/plaza1") else {
+        eprintln!("skipped: shared/data/plaza1 not found beside the repository");
+        return;
+    };
+    let root = scratch("own-logs-plaza");
+    let p = plaza.display().to_string();
+    ok(&root, &["log", "from-plaza", &p, "p-csv"]);
+    let config = repo_root().join("scenarios/range-beacon-plaza.toml");
+    let own = ok(
+        &root,
+        &[
+            "replay",
+            "range-beacon",
+            "p-csv",
+            "--config",
+            config.to_str().unwrap(),
+            "--out",
+            "o1",
+        ],
+    );
+    let native = ok(&root, &["replay", "plaza", &p, "--out", "o2"]);
+    // Same table rows (method, mean, std, max, rmse) for every method.
+    let rows = |text: &str| -> Vec<String> {
+        text.lines()
+            .filter(|l| l.split_whitespace().count() == 6 && !l.starts_with("method"))
+            .filter(|l| {
+                l.split_whitespace()
+                    .nth(1)
+                    .is_some_and(|v| v.parse::<f64>().is_ok())
+            })
+            .map(|l| l.split_whitespace().take(5).collect::<Vec<_>>().join(" "))
+            .collect()
+    };
+    let (a, b) = (rows(&own), rows(&native));
+    assert!(a.len() >= 4, "{own}");
+    assert_eq!(a, b, "own:\n{own}\nnative:\n{native}");
+}
