@@ -46,6 +46,7 @@ pub fn run_experiment(
         threads,
         workspace_root: root.to_path_buf(),
         out_root: root.join("out"),
+        force: false,
     };
     let mut sink = Vec::new();
     run_paper_to(&options, &fathom::sim::experiments::registry(), &mut sink)

@@ -213,6 +213,92 @@ pub fn require_in_range(
     }
 }
 
+/// Largest magnitude of a position or length (keys ending in `_m`, and
+/// `positions`): 10⁷ m, beyond the Earth's radius, where ranges and their squares
+/// stop being meaningful.
+pub const MAX_LENGTH_M: f64 = 1e7;
+
+/// Largest noise σ (keys containing `sigma`), in the key's unit: 10⁶. Beyond it no
+/// sensor is described and σ² heads for overflow.
+pub const MAX_SIGMA: f64 = 1e6;
+
+/// Largest power spectral density (keys ending in `_psd`): 10¹², the square of
+/// [`MAX_SIGMA`].
+pub const MAX_PSD: f64 = 1e12;
+
+/// Checks the magnitudes that hold for every scenario, whatever the experiment:
+/// positions and lengths within [`MAX_LENGTH_M`], noise σ within [`MAX_SIGMA`], PSDs
+/// within [`MAX_PSD`] (by key name, see the units table of `docs/scenarios.md`).
+/// Values beyond them would make the geometry or the noise meaningless (a beacon at
+/// 10³⁰⁸ m gives non-finite ranges), so they are refused when the file is checked.
+///
+/// # Errors
+/// [`SimError::Invalid`] naming the key (with its array index) and the value.
+pub fn check_magnitudes(text: &str, file: &str) -> Result<(), SimError> {
+    let Ok(table) = toml::from_str::<toml::Table>(text) else {
+        // The typed parse reports syntax errors with their key and line.
+        return Ok(());
+    };
+    walk_table(&table, "", file)
+}
+
+fn walk_table(table: &toml::Table, prefix: &str, file: &str) -> Result<(), SimError> {
+    for (k, v) in table {
+        let path = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        walk_value(v, k, &path, file)?;
+    }
+    Ok(())
+}
+
+fn walk_value(v: &toml::Value, key: &str, path: &str, file: &str) -> Result<(), SimError> {
+    match v {
+        toml::Value::Table(t) => walk_table(t, path, file),
+        toml::Value::Array(a) => {
+            for (i, item) in a.iter().enumerate() {
+                walk_value(item, key, &format!("{path}[{i}]"), file)?;
+            }
+            Ok(())
+        }
+        toml::Value::Float(x) => check_magnitude(*x, key, path, file),
+        toml::Value::Integer(i) => check_magnitude(*i as f64, key, path, file),
+        _ => Ok(()),
+    }
+}
+
+fn check_magnitude(x: f64, key: &str, path: &str, file: &str) -> Result<(), SimError> {
+    let (limit, what) = if key.contains("sigma") {
+        (
+            MAX_SIGMA,
+            "a noise σ beyond 1e6 (in the key's unit) describes no sensor",
+        )
+    } else if key.ends_with("_psd") {
+        (
+            MAX_PSD,
+            "a spectral density beyond 1e12 describes no sensor",
+        )
+    } else if key.ends_with("_m") || key == "positions" {
+        (
+            MAX_LENGTH_M,
+            "positions and lengths beyond 1e7 m (the Earth's radius) make ranges meaningless",
+        )
+    } else {
+        return Ok(());
+    };
+    // NaN and infinities are left to the experiment's own range checks.
+    if x.is_finite() && x.abs() > limit {
+        return Err(SimError::invalid(
+            file,
+            path,
+            format!("must be at most {limit:e} in magnitude, got {x}: {what}"),
+        ));
+    }
+    Ok(())
+}
+
 /// Check the top-level `experiment` key of a scenario file names `expected`.
 ///
 /// # Errors
@@ -374,6 +460,30 @@ mod tests {
         assert_eq!(line_col("ab\ncd", 0), (1, 1));
         assert_eq!(line_col("ab\ncd", 4), (2, 2));
         assert_eq!(line_col("ab\ncd", 99), (2, 3));
+    }
+
+    #[test]
+    fn magnitudes_beyond_any_sensor_or_place_are_refused_with_their_key() {
+        let ok = "[a]\nx_m = 1e6\nsigma_m = 3.0\npositions = [[1.0, 2.0, 3.0]]\nn = 1e300\n";
+        assert!(check_magnitudes(ok, "f").is_ok());
+        for (text, key) in [
+            (
+                "[beacons]\npositions = [[0.0, 1e308, 0.0]]\n",
+                "beacons.positions[0][1]",
+            ),
+            ("[noise]\nrange_sigma_m = 1e200\n", "noise.range_sigma_m"),
+            ("velocity_sigma = [0.1, -2e6]\n", "velocity_sigma[1]"),
+            ("[f]\naccel_psd = 1e13\n", "f.accel_psd"),
+            ("[m]\nsearch_depth_m = -2e7\n", "m.search_depth_m"),
+        ] {
+            let e = check_magnitudes(text, "f.toml").unwrap_err().to_string();
+            assert!(
+                e.starts_with(&format!("f.toml: key `{key}`: must be at most")),
+                "{e}"
+            );
+        }
+        // Non-finite values are left to the range checks (which name them).
+        assert!(check_magnitudes("x_m = nan\n", "f").is_ok());
     }
 
     #[test]
