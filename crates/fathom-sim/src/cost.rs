@@ -77,15 +77,26 @@ pub enum Held {
     PerThread,
 }
 
+/// A scenario key that drives a [`CostTerm`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct CostKey {
+    /// The key as written in the scenario (e.g. `motion.step_s`).
+    pub key: String,
+    /// Its value, in the key's unit.
+    pub value: f64,
+    /// By how much it raises the cost over the preset (e.g. 10 for a step ten times
+    /// smaller than the preset's): the key with the largest factor is the one a
+    /// refusal names.
+    pub factor: f64,
+}
+
 /// One part of a scenario's cost.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct CostTerm {
     /// What it is (e.g. "motion steps of a run").
     pub what: String,
-    /// The keys that drive it, as written in the scenario, with their values in the
-    /// key's unit (e.g. `motion.duration_s = 180`); the first one is named in a
-    /// refusal.
-    pub keys: Vec<(String, f64)>,
+    /// The keys that drive it, with their values and their factors over the preset.
+    pub keys: Vec<CostKey>,
     /// Samples simulated or processed in total (all runs of all batches).
     pub samples: f64,
     /// Single-core time per sample, s.
@@ -115,9 +126,24 @@ impl CostTerm {
         }
     }
 
-    /// Adds a driving key and its value.
-    pub fn key(mut self, key: impl Into<String>, value: f64) -> Self {
-        self.keys.push((key.into(), value));
+    /// Adds a driving key and its value; the cost grows with the value (`preset`
+    /// is the preset's value of the key).
+    pub fn up(self, key: impl Into<String>, value: f64, preset: f64) -> Self {
+        self.with_key(key, value, value / preset)
+    }
+
+    /// Adds a driving key whose cost grows as the value shrinks (a step, a period).
+    pub fn down(self, key: impl Into<String>, value: f64, preset: f64) -> Self {
+        self.with_key(key, value, preset / value)
+    }
+
+    fn with_key(mut self, key: impl Into<String>, value: f64, factor: f64) -> Self {
+        let factor = if factor.is_nan() { 0.0 } else { factor };
+        self.keys.push(CostKey {
+            key: key.into(),
+            value,
+            factor,
+        });
         self
     }
 
@@ -133,16 +159,17 @@ impl CostTerm {
         }
     }
 
-    /// The main key and the term described with every key's value.
+    /// The main key (the largest factor over the preset) and the term described with
+    /// every key's value, the main key first.
     fn describe(&self) -> (String, String) {
-        let main = self
-            .keys
+        let mut keys: Vec<&CostKey> = self.keys.iter().collect();
+        keys.sort_by(|a, b| b.factor.total_cmp(&a.factor));
+        let main = keys
             .first()
-            .map_or_else(|| "runs".to_string(), |(k, _)| k.clone());
-        let keys = self
-            .keys
+            .map_or_else(|| "runs".to_string(), |k| k.key.clone());
+        let keys = keys
             .iter()
-            .map(|(k, v)| format!("`{k}` = {}", short(*v)))
+            .map(|k| format!("`{}` = {}", k.key, short(k.value)))
             .collect::<Vec<_>>()
             .join(", ");
         let from = if keys.is_empty() {
@@ -327,9 +354,9 @@ mod tests {
         Cost::new(
             vec![
                 CostTerm::new("motion steps", 1e6, 1e-7, 1e3, Held::PerThread)
-                    .key("motion.duration_s", 180.0)
-                    .key("motion.step_s", 0.01),
-                CostTerm::new("kept per run", 100.0, 0.0, 1e4, Held::Once).key("runs", 100.0),
+                    .up("motion.duration_s", 180.0, 180.0)
+                    .down("motion.step_s", 0.01, 0.01),
+                CostTerm::new("kept per run", 100.0, 0.0, 1e4, Held::Once).up("runs", 100.0, 100.0),
             ],
             4,
         )
@@ -373,6 +400,13 @@ mod tests {
             "{e}"
         );
         assert!(e.contains("`motion.step_s` = 0.01"), "{e}");
+        // The key named is the one furthest beyond the preset.
+        c.terms[0].keys[1].factor = 1e9;
+        let e = c
+            .check(&Limits::default(), "f.toml")
+            .unwrap_err()
+            .to_string();
+        assert!(e.starts_with("f.toml: key `motion.step_s`:"), "{e}");
         // NaN and infinite estimates are refused, not let through.
         c.terms[0].samples = f64::NAN;
         assert!(c.check(&Limits::default(), "f").is_err());

@@ -15,6 +15,7 @@
 //! [`crate::replay::plaza`], shared with `fathom replay plaza`.
 
 mod analysis;
+mod cost;
 mod figures;
 mod report;
 
@@ -23,6 +24,7 @@ use std::path::{Path, PathBuf};
 use rand_chacha::ChaCha8Rng;
 
 use crate::SimError;
+use crate::cost::CostTerm;
 use crate::data::plaza::PlazaLog;
 use crate::experiment::{Analysis, Batch, Environment, Experiment, ScenarioFile};
 use crate::replay::plaza::{PlazaReplay, PlazaSettings, PlazaToml, replay};
@@ -70,6 +72,10 @@ impl Experiment for Plaza {
 
     fn check(&self, scenario: &PlazaToml, file: &str) -> Result<PlazaSettings, SimError> {
         scenario.check(file)
+    }
+
+    fn cost(&self, scenario: &PlazaToml) -> Vec<CostTerm> {
+        cost::terms(scenario)
     }
 
     fn prepare(&self, settings: PlazaSettings, env: &Environment) -> Result<Prepared, SimError> {

@@ -12,6 +12,7 @@
 //! `analysis` (rows and claims), `figures`, `report`.
 
 mod analysis;
+mod cost;
 mod figures;
 mod report;
 mod scenario;
@@ -22,6 +23,7 @@ use rand_chacha::ChaCha8Rng;
 use self::scenario::{Checked, VkfScenario};
 use self::sim::{RunOutput, Shared};
 use crate::SimError;
+use crate::cost::CostTerm;
 use crate::experiment::{Analysis, Batch, Environment, Experiment};
 
 /// The checked scenario and the truth every run shares.
@@ -54,6 +56,10 @@ impl Experiment for Vkf {
 
     fn check(&self, scenario: &VkfScenario, file: &str) -> Result<Checked, SimError> {
         scenario.check(file)
+    }
+
+    fn cost(&self, scenario: &VkfScenario) -> Vec<CostTerm> {
+        cost::terms(scenario)
     }
 
     fn prepare(&self, c: Checked, _env: &Environment) -> Result<Prepared, SimError> {
