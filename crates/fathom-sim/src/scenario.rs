@@ -283,7 +283,7 @@ fn check_magnitude(x: f64, key: &str, path: &str, file: &str) -> Result<(), SimE
     } else if key.ends_with("_m") || key == "positions" {
         (
             MAX_LENGTH_M,
-            "positions and lengths beyond 1e7 m (the Earth's radius) make ranges meaningless",
+            "positions and lengths beyond 1e7 m (more than the Earth's radius) make ranges meaningless",
         )
     } else {
         return Ok(());
@@ -293,7 +293,10 @@ fn check_magnitude(x: f64, key: &str, path: &str, file: &str) -> Result<(), SimE
         return Err(SimError::invalid(
             file,
             path,
-            format!("must be at most {limit:e} in magnitude, got {x}: {what}"),
+            format!(
+                "must be at most {limit:e} in magnitude, got {}: {what}",
+                crate::cost::short(x)
+            ),
         ));
     }
     Ok(())
@@ -481,6 +484,8 @@ mod tests {
                 e.starts_with(&format!("f.toml: key `{key}`: must be at most")),
                 "{e}"
             );
+            // The value is shown short (`1.0e308`), not as 309 digits.
+            assert!(e.len() < 200, "{e}");
         }
         // Non-finite values are left to the range checks (which name them).
         assert!(check_magnitudes("x_m = nan\n", "f").is_ok());
