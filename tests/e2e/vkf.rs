@@ -44,6 +44,7 @@ fn run(tag: &str, threads: usize) -> fathom_sim::output::Summary {
         threads: Some(threads),
         workspace_root: root.clone(),
         out_root: root.join("target/paper"),
+        force: false,
     };
     let res = run_paper_to(&options, &registry(), &mut Vec::new()).unwrap();
     let dir = root.join("target/paper/vkf");
