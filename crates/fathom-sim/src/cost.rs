@@ -147,9 +147,14 @@ impl CostTerm {
         self
     }
 
-    /// The term's single-core time, s.
+    /// The term's single-core time, s (0 for a term that costs memory only, even with
+    /// an infinite sample count).
     pub fn seconds(&self) -> f64 {
-        self.samples * self.seconds_per_sample
+        if self.seconds_per_sample == 0.0 {
+            0.0
+        } else {
+            self.samples * self.seconds_per_sample
+        }
     }
 
     fn memory(&self, threads: f64) -> f64 {
@@ -412,6 +417,9 @@ mod tests {
         assert!(c.check(&Limits::default(), "f").is_err());
         c.terms[0].samples = f64::INFINITY;
         assert!(c.check(&Limits::default(), "f").is_err());
+        // A memory-only term with an infinite count costs no time (not NaN).
+        let t = CostTerm::new("m", f64::INFINITY, 0.0, 1.0, Held::Once);
+        assert_eq!(t.seconds(), 0.0);
     }
 
     #[test]
