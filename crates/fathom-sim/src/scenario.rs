@@ -38,7 +38,7 @@ pub fn parse_toml<T: DeserializeOwned>(text: &str, file_label: &str) -> Result<T
 
 /// Convert a `toml` deserialization error into a [`SimError::Toml`].
 fn toml_error(err: &toml::de::Error, text: &str, file_label: &str) -> SimError {
-    let message = err.message().trim().to_string();
+    let message = plain_types(err.message().trim());
     let table_keys = keys_from_error(err);
     // A missing field's span is its whole enclosing table: at the top level that is the
     // whole file, so a line number would only point at line 1; inside a table it is the
@@ -72,6 +72,32 @@ fn toml_error(err: &toml::de::Error, text: &str, file_label: &str) -> SimError {
         column,
         message,
     }
+}
+
+/// The `toml` / serde message with Rust type names said in words ("integer `-5`,
+/// expected usize" becomes "integer `-5`, expected a whole number >= 0").
+fn plain_types(message: &str) -> String {
+    let mut m = message.replace(" as i128", "").replace(" as u128", "");
+    for (rust, plain) in [
+        ("expected usize", "expected a whole number >= 0"),
+        (
+            "expected u64",
+            "expected a whole number from 0 to 9223372036854775807 (2^63 - 1)",
+        ),
+        (
+            "expected u32",
+            "expected a whole number from 0 to 4294967295",
+        ),
+        ("expected u16", "expected a whole number from 0 to 65535"),
+        ("expected u8", "expected a whole number from 0 to 255"),
+        ("expected i64", "expected a whole number"),
+        ("expected i32", "expected a whole number"),
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+    ] {
+        m = m.replace(rust, plain);
+    }
+    m
 }
 
 /// The dotted key path the `toml` crate recorded for the error.
@@ -392,6 +418,23 @@ mod tests {
         assert!(s.contains("line 4"), "{s}");
         assert!(s.contains("unknown field `runz`"), "{s}");
         assert!(matches!(e, SimError::Toml { line: Some(4), .. }));
+    }
+
+    #[test]
+    fn messages_say_types_in_words() {
+        assert_eq!(
+            plain_types("invalid type: integer `99999999999999999999` as i128, expected u64"),
+            "invalid type: integer `99999999999999999999`, expected a whole number from 0 to \
+             9223372036854775807 (2^63 - 1)"
+        );
+        assert_eq!(
+            plain_types("invalid value: integer `-5`, expected usize"),
+            "invalid value: integer `-5`, expected a whole number >= 0"
+        );
+        assert_eq!(
+            plain_types("invalid type: string \"a\", expected f64"),
+            "invalid type: string \"a\", expected a number"
+        );
     }
 
     #[test]
