@@ -249,7 +249,7 @@ impl Cost {
         let threads = self.threads as f64;
         let memory = self.memory_bytes();
         // NaN compares false: a NaN estimate (never expected) is refused too.
-        if !(memory <= limits.memory_bytes) {
+        if memory.is_nan() || memory > limits.memory_bytes {
             let worst = self
                 .terms
                 .iter()
@@ -268,7 +268,7 @@ impl Cost {
             ));
         }
         let seconds = self.seconds();
-        if !(seconds <= limits.seconds) {
+        if seconds.is_nan() || seconds > limits.seconds {
             let worst = self
                 .terms
                 .iter()

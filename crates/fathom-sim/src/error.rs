@@ -174,6 +174,12 @@ impl SimError {
             | SimError::Input(_) => true,
             SimError::Io { action, .. } => matches!(*action, "read" | "list directory"),
             SimError::Experiment { source, .. } => source.is_user_error(),
+            // A file the user gave that is not valid JSON (a corrupted shard record);
+            // writing JSON never fails with these categories.
+            SimError::Json { source, .. } => matches!(
+                source.classify(),
+                serde_json::error::Category::Syntax | serde_json::error::Category::Eof
+            ),
             _ => false,
         }
     }
