@@ -19,9 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         seed: Some(7),
         threads: None,
         progress: None,
-        env: Environment {
-            base_dir: std::env::current_dir()?,
-        },
+        env: Environment::new(std::env::current_dir()?),
     };
     let done = beacons.execute(&job)?;
     let s = &done.summary;

@@ -16,12 +16,14 @@ use fathom_map::{
     AxisConvention, BruteForceCaster, BvhCaster, ImportReport, ImportSettings, MapError,
     MaterialTable, TriMesh, obj, stl,
 };
+use fathom_sim::SimError;
+use fathom_sim::cost::Limits;
 use fathom_sim::data::matv5::mat_v5_bytes;
 use fathom_sim::data::plaza::{
     BeaconSite, PlazaMat, RangeOrder, parse_mat, parse_odometry, parse_ranges,
 };
 use fathom_sim::experiments::registry;
-use fathom_sim::user_run::{check_scenario_text, one_line};
+use fathom_sim::user_run::{check_scenario_text, one_line, peek_experiment};
 
 /// Target `scenario`: the bytes (lossy UTF-8) as a scenario file through
 /// [`check_scenario_text`] (what `fathom check` does).
@@ -236,6 +238,70 @@ pub fn edited_preset(data: &[u8]) -> String {
 /// experiment's validation rather than in the TOML syntax.
 pub fn scenario_edit(data: &[u8]) -> Vec<String> {
     check_text(&edited_preset(data))
+}
+
+/// Target `cost`: [`edited_preset`] through its experiment's cost estimate
+/// ([`fathom_sim::cost`], what `fathom check` and `fathom run` refuse a scenario by).
+///
+/// For a scenario that checks, the estimate (per term and in total) must never be NaN
+/// or negative, memory must not shrink and time not grow with more worker threads,
+/// the limit check must agree with the totals, and a refusal must name a key the
+/// estimate lists (or `runs`).
+pub fn cost(data: &[u8]) -> Vec<String> {
+    let text = edited_preset(data);
+    let reg = registry();
+    let exp = match peek_experiment(&text, "fuzz.toml", &reg) {
+        Ok(e) => e,
+        Err(e) => return vec![one_line(&fathom_sim::error_chain(&e))],
+    };
+    let limits = Limits::default();
+    let mut outcome = Vec::new();
+    let mut previous: Option<(f64, f64)> = None;
+    for threads in [1, 3, 64] {
+        let c = match exp.cost(&text, "fuzz.toml", None, None, Some(threads)) {
+            Ok(c) => c,
+            Err(e) => return vec![one_line(&fathom_sim::error_chain(&e))],
+        };
+        assert!(c.is_known(), "{}: no estimate", exp.name());
+        for t in &c.terms {
+            for v in [t.samples, t.bytes, t.seconds_per_sample, t.seconds()] {
+                assert!(v >= 0.0, "term `{}`: {v}\n{text}", t.what);
+            }
+        }
+        let (m, s) = (c.memory_bytes(), c.seconds());
+        assert!(
+            m >= 0.0 && s >= 0.0 && c.samples() >= 0.0,
+            "{m} B, {s} s\n{text}"
+        );
+        if let Some((m0, s0)) = previous {
+            assert!(
+                m >= m0 && s <= s0,
+                "{threads} threads: {m0} -> {m} B, {s0} -> {s} s"
+            );
+        }
+        previous = Some((m, s));
+        let fits = m <= limits.memory_bytes && s <= limits.seconds;
+        match c.check(&limits, "fuzz.toml") {
+            Ok(()) => assert!(fits, "accepted beyond the limits: {m} B, {s} s"),
+            Err(SimError::Invalid { key_path, .. }) => {
+                assert!(!fits, "refused within the limits: {m} B, {s} s");
+                let listed = c
+                    .terms
+                    .iter()
+                    .any(|t| t.keys.iter().any(|k| k.key == key_path));
+                assert!(key_path == "runs" || listed, "refusal names `{key_path}`");
+            }
+            Err(e) => panic!("unexpected error kind: {e:?}"),
+        }
+        if threads == 1 {
+            outcome.push(format!(
+                "{}: {}",
+                if fits { "fits" } else { "refused" },
+                c.summary()
+            ));
+        }
+    }
+    outcome
 }
 
 /// The beacon survey that [`plaza_text`] checks range files against (the ids of

@@ -17,9 +17,10 @@ mod harness;
 
 type Harness = fn(&[u8]) -> Vec<String>;
 
-const TARGETS: [(&str, Harness); 6] = [
+const TARGETS: [(&str, Harness); 7] = [
     ("scenario", harness::scenario),
     ("scenario_edit", harness::scenario_edit),
+    ("cost", harness::cost),
     ("plaza_text", harness::plaza_text),
     ("plaza_mat", harness::plaza_mat),
     ("map_obj", harness::map_obj),

@@ -124,6 +124,7 @@ fn experiment_runs_on_a_truncated_copy_and_writes_the_contract_outputs() {
     );
     write_scenario(&root, "plaza.toml", &scenario);
     let result = run_experiment(&root, "plaza", Some(1)).unwrap();
+    crate::support::assert_every_row_has_a_unit(&result.experiments[0]);
     let summary = &result.experiments[0].summary;
     assert_eq!(summary.experiment, "plaza");
     assert_eq!(summary.runs, 1);

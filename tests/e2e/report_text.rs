@@ -11,6 +11,7 @@ fn run(tag: &str, name: &str, text: &str) -> (Summary, String) {
     let root = scratch(tag);
     write_scenario(&root, &format!("{name}.toml"), text);
     let result = run_experiment(&root, name, Some(2)).unwrap();
+    crate::support::assert_every_row_has_a_unit(&result.experiments[0]);
     let report = std::fs::read_to_string(root.join("out").join(name).join("report.md")).unwrap();
     (result.experiments[0].summary.clone(), report)
 }

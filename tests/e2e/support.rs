@@ -46,9 +46,24 @@ pub fn run_experiment(
         threads,
         workspace_root: root.to_path_buf(),
         out_root: root.join("out"),
+        force: false,
     };
     let mut sink = Vec::new();
     run_paper_to(&options, &fathom::sim::experiments::registry(), &mut sink)
+}
+
+/// Every row of the experiment has a declared unit (the console and `report.md`
+/// show it; `-` would mean a forgotten declaration).
+pub fn assert_every_row_has_a_unit(e: &fathom::sim::driver::ExperimentResult) {
+    for r in &e.summary.rows {
+        assert!(
+            e.units.contains_key(&r.metric),
+            "{}: row {} / {} has no unit",
+            e.name,
+            r.method,
+            r.metric
+        );
+    }
 }
 
 /// The full error chain as one string (what `cargo xtask paper` prints).

@@ -44,8 +44,10 @@ fn run(tag: &str, threads: usize) -> fathom_sim::output::Summary {
         threads: Some(threads),
         workspace_root: root.clone(),
         out_root: root.join("target/paper"),
+        force: false,
     };
     let res = run_paper_to(&options, &registry(), &mut Vec::new()).unwrap();
+    crate::support::assert_every_row_has_a_unit(&res.experiments[0]);
     let dir = root.join("target/paper/vkf");
     for f in [
         "summary.json",

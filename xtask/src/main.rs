@@ -1,5 +1,5 @@
 //! Project automation. `cargo xtask codegen` regenerates `docs/scenarios.md`;
-//! `cargo xtask paper [--only NAME] [--runs N] [--threads T]`
+//! `cargo xtask paper [--only NAME] [--runs N] [--threads T] [--out DIR] [--force]`
 //! reproduces the papers' experiments into `target/paper/` (see
 //! `shared/spec/README.md`, "Output contract"); `cargo xtask bench [--compare]
 //! [FILTER]` runs the benchmarks into `target/bench/bench.json` (see
@@ -32,6 +32,9 @@ options of `paper`:
   --only NAME     run only experiment NAME
   --runs N        override every experiment's Monte Carlo run count (N >= 1)
   --threads T     worker threads (T >= 1; default: all cores)
+  --out DIR       output root instead of target/paper
+  --force         write an experiment's folder even if it holds files fathom did
+                  not write (they are kept; only fathom's own files are replaced)
 
 options of `bench`:
   --compare       also time FilterPy's KalmanFilter on the same 6/3 problem
@@ -53,6 +56,8 @@ enum Command {
         only: Option<String>,
         runs: Option<usize>,
         threads: Option<usize>,
+        out: Option<PathBuf>,
+        force: bool,
     },
 }
 
@@ -74,19 +79,24 @@ fn parse_args(args: &[String]) -> Result<Command, String> {
         "bench" => return parse_bench(rest),
         other => return Err(format!("unknown command `{other}`")),
     }
-    let (mut only, mut runs, mut threads) = (None, None, None);
+    let (mut only, mut runs, mut threads, mut out, mut force) = (None, None, None, None, false);
     let mut i = 0;
     while i < rest.len() {
         let arg = rest[i].as_str();
         if arg == "-h" || arg == "--help" {
             return Ok(Command::Help);
         }
+        if arg == "--force" {
+            force = true;
+            i += 1;
+            continue;
+        }
         // Accept both `--flag value` and `--flag=value`.
         let (flag, inline) = match arg.split_once('=') {
             Some((f, v)) if f.starts_with("--") => (f, Some(v.to_string())),
             _ => (arg, None),
         };
-        if !matches!(flag, "--only" | "--runs" | "--threads") {
+        if !matches!(flag, "--only" | "--runs" | "--threads" | "--out") {
             return Err(format!("unknown option `{arg}`"));
         }
         let value = match inline {
@@ -109,6 +119,8 @@ fn parse_args(args: &[String]) -> Result<Command, String> {
         match flag {
             "--only" if value.is_empty() => return Err("option `--only` needs a name".into()),
             "--only" => only = Some(value),
+            "--out" if value.is_empty() => return Err("option `--out` needs a folder".into()),
+            "--out" => out = Some(PathBuf::from(value)),
             "--runs" => runs = Some(count(&value)?),
             _ => threads = Some(count(&value)?),
         }
@@ -118,6 +130,8 @@ fn parse_args(args: &[String]) -> Result<Command, String> {
         only,
         runs,
         threads,
+        out,
+        force,
     })
 }
 
@@ -155,17 +169,30 @@ fn workspace_root() -> Result<PathBuf> {
         .with_context(|| format!("xtask manifest dir `{}` has no parent", manifest.display()))
 }
 
-fn paper(only: Option<String>, runs: Option<usize>, threads: Option<usize>) -> Result<()> {
-    let root = workspace_root()?;
+/// `cargo xtask paper`; the error is the user's (exit code 2) or fathom's (1).
+fn paper(
+    only: Option<String>,
+    runs: Option<usize>,
+    threads: Option<usize>,
+    out: Option<PathBuf>,
+    force: bool,
+) -> Result<(), (u8, anyhow::Error)> {
+    let root = workspace_root().map_err(|e| (1, e))?;
     let options = PaperOptions {
         only,
         runs,
         threads,
-        out_root: root.join("target").join("paper"),
+        out_root: out.unwrap_or_else(|| root.join("target").join("paper")),
         workspace_root: root,
+        force,
     };
-    let result = run_paper(options, &fathom_sim::experiments::registry())
-        .context("cargo xtask paper failed")?;
+    let result = run_paper(options, &fathom_sim::experiments::registry()).map_err(|e| {
+        let code = if e.is_user_error() { 2 } else { 1 };
+        (
+            code,
+            anyhow::Error::new(e).context("cargo xtask paper failed"),
+        )
+    })?;
     println!(
         "{} experiment(s) done; report: {}",
         result.experiments.len(),
@@ -220,11 +247,13 @@ fn main() -> ExitCode {
             only,
             runs,
             threads,
-        }) => match paper(only, runs, threads) {
+            out,
+            force,
+        }) => match paper(only, runs, threads, out, force) {
             Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
+            Err((code, e)) => {
                 eprintln!("error: {e:#}");
-                ExitCode::FAILURE
+                ExitCode::from(code)
             }
         },
     }
@@ -242,11 +271,13 @@ mod tests {
     #[test]
     fn parses_paper_flags() {
         assert_eq!(
-            parse("paper --only noise --runs 5 --threads=2"),
+            parse("paper --only noise --runs 5 --threads=2 --out /tmp/p --force"),
             Ok(Command::Paper {
                 only: Some("noise".into()),
                 runs: Some(5),
-                threads: Some(2)
+                threads: Some(2),
+                out: Some(PathBuf::from("/tmp/p")),
+                force: true,
             })
         );
         assert_eq!(
@@ -254,7 +285,9 @@ mod tests {
             Ok(Command::Paper {
                 only: None,
                 runs: None,
-                threads: None
+                threads: None,
+                out: None,
+                force: false,
             })
         );
         assert_eq!(parse("help"), Ok(Command::Help));

@@ -1,14 +1,16 @@
 //! `fathom`: the command-line tool.
 //!
 //! ```text
-//! fathom run <scenario.toml> [--runs N] [--seed S] [--threads T] [--out DIR]
-//! fathom check <scenario.toml>
+//! fathom run <scenario.toml> [--runs N] [--seed S] [--threads T] [--out DIR] [--force]
+//!            [--max-memory-gb G] [--max-hours H]
+//! fathom check <scenario.toml> [--max-memory-gb G] [--max-hours H]
 //! fathom list
-//! fathom replay plaza <DIR> [--config FILE] [--out DIR]
+//! fathom replay plaza <DIR> [--config FILE] [--out DIR] [--force]
 //! fathom replay range-beacon|ins-dvl <DIR> [--config FILE] [--out DIR]
 //! fathom log example range-beacon|ins-dvl <DIR> [--duration S] [--seed S] [--no-truth]
 //! fathom log from-plaza <PLAZA_DIR> <DIR>
 //! fathom log check <DIR>
+//! fathom merge <SHARD DIRS...> --out DIR [--force]
 //! ```
 //!
 //! `run` runs any scenario file of a registered experiment (the file's top-level
@@ -19,11 +21,25 @@
 //! `scenario.resolved.toml`, `run_info.json` and `summary.json`, so the resolved file
 //! reproduces the run with the same `--runs`; a deterministic experiment such as
 //! `plaza` has no seed and refuses `--seed` with exit code 2). The same scenario and seed give a byte-identical
-//! `summary.json` for any `--threads`. While it runs, a progress bar on standard error
-//! shows the current Monte Carlo batch, runs done, rate and ETA; it is not drawn when
-//! standard error is not a terminal (pipes, CI logs). `check` parses and validates a
-//! scenario without running it. `list` shows the experiments, estimators, update
-//! schemes and sensors.
+//! `summary.json` for any `--threads`. `run` first prints the run's estimated cost,
+//! then one line per finished Monte Carlo batch (also in a pipe), then every result
+//! row with its unit and 95 % interval and the claims. On a terminal a progress bar on
+//! standard error shows the current batch, runs done, rate and ETA; it is not drawn
+//! when standard error is not a terminal (pipes, CI logs).
+//!
+//! Output folders never lose work: the outputs are written into a temporary folder
+//! beside `--out` and moved into place once complete, so an interrupted or failed run
+//! leaves the previous results as they were. A folder holding files fathom did not
+//! write, or one another fathom process is writing, is refused (exit 2) before
+//! anything is computed; `--force` writes anyway, keeping the user's files and
+//! replacing only fathom's own. Where `--out` cannot be written is found before
+//! computing too.
+//!
+//! `check` parses and validates a scenario without running it and estimates its cost
+//! (samples, memory, run time); `check` and `run` refuse a scenario beyond the
+//! limits (`--max-memory-gb`, default 4; `--max-hours`, default 24) naming the key
+//! that drives the cost. `list` shows the experiments, estimators, update schemes and
+//! sensors.
 //!
 //! `replay plaza` replays range-beacon localization on a recorded data set:
 //!
@@ -41,25 +57,30 @@
 //! `log from-plaza` converts a CMU Plaza data set into the layout, `log check` reads
 //! every file of a log and reports the first error (file, line, column).
 //!
-//! Exit codes: 0 success, 2 usage or configuration error (bad arguments, unreadable or
-//! invalid settings file, data folder missing), 1 a failure while running (a data file
-//! that cannot be read or is malformed, an estimator or output error). Errors are
-//! printed as one message with their whole cause chain.
+//! Exit codes: 0 success; 2 for anything the user wrote (flags, the scenario or
+//! settings file, a data folder or data file, the output folder); 1 for a failure of
+//! fathom itself while running (an estimator failing on a checked scenario, an output
+//! that cannot be written after the run). Errors are printed on one line with their
+//! whole cause chain, naming the key or the option.
 
 mod pils;
 
-use std::io::IsTerminal;
+use std::io::{IsTerminal, Write as _};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Mutex;
+use std::time::Instant;
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
+use fathom_sim::cost::Limits;
 use fathom_sim::data::layout::convert::range_beacon_from_plaza;
 use fathom_sim::data::layout::ins_dvl::InsDvlLog;
 use fathom_sim::data::layout::range_beacon::RangeBeaconLog;
 use fathom_sim::data::layout::{FileSet, LogKind, Manifest, write_log};
 use fathom_sim::data::plaza::PlazaLog;
 use fathom_sim::driver::campaign::{merge, run_shard, slurm_script};
+use fathom_sim::driver::{console_claims, console_rows, console_setup};
 use fathom_sim::example_log::{ins_dvl_example, range_beacon_example};
 use fathom_sim::experiment::{Environment, Job, Shard};
 use fathom_sim::experiments::plaza::Plaza;
@@ -67,8 +88,8 @@ use fathom_sim::progress::{Progress, ProgressEvent};
 use fathom_sim::replay::own_log::{OwnLogError, preset, replay_dir, write_outputs};
 use fathom_sim::replay::plaza::parse_settings;
 use fathom_sim::user_run::{
-    RunOptions, check_command, check_scenario, one_line, peek_experiment, run_scenario_text,
-    run_scenario_with_progress,
+    RunOptions, check_command, check_command_with, check_scenario_with, one_line, peek_experiment,
+    run_scenario_text,
 };
 use fathom_sim::{Experiment, SimError, error_chain, experiments::registry};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -120,6 +141,10 @@ struct MergeArgs {
     /// Worker threads of the analysis (results do not depend on it).
     #[arg(long, value_name = "T")]
     threads: Option<usize>,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -143,6 +168,23 @@ struct SlurmArgs {
     dir: PathBuf,
 }
 
+/// The limits a scenario's estimated cost must fit.
+#[derive(Debug, Args)]
+struct LimitArgs {
+    /// Refuse a scenario estimated to need more memory than this, in GiB (default 4).
+    #[arg(long, value_name = "G")]
+    max_memory_gb: Option<f64>,
+    /// Refuse a scenario estimated to run longer than this, in hours (default 24).
+    #[arg(long, value_name = "H")]
+    max_hours: Option<f64>,
+}
+
+impl LimitArgs {
+    fn limits(&self) -> Result<Limits, Failure> {
+        Limits::from_options(self.max_memory_gb, self.max_hours).map_err(failure)
+    }
+}
+
 #[derive(Debug, Args)]
 struct RunArgs {
     /// Scenario file (TOML with a top-level `experiment = "<name>"`).
@@ -150,7 +192,8 @@ struct RunArgs {
     /// Override the scenario's Monte Carlo run count.
     #[arg(long, value_name = "N")]
     runs: Option<usize>,
-    /// Override the scenario's base seed (run i uses ChaCha stream i of it).
+    /// Override the scenario's base seed, 0 to 2^63 - 1 (run i uses ChaCha stream i
+    /// of it).
     #[arg(long, value_name = "S")]
     seed: Option<u64>,
     /// Worker threads (default: all cores; results do not depend on it).
@@ -159,6 +202,12 @@ struct RunArgs {
     /// Output folder (default `fathom-out/<experiment>`).
     #[arg(long, value_name = "DIR")]
     out: Option<PathBuf>,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    force: bool,
+    #[command(flatten)]
+    limits: LimitArgs,
     /// Run only shard K of M of every batch and write its records and manifest into
     /// `--out` (no analysis; `fathom merge` combines the shards).
     #[arg(long, value_name = "K/M", value_parser = parse_shard)]
@@ -191,6 +240,8 @@ struct CheckArgs {
     /// Print only the OK line, not the resolved scenario.
     #[arg(long)]
     quiet: bool,
+    #[command(flatten)]
+    limits: LimitArgs,
 }
 
 #[derive(Debug, Subcommand)]
@@ -286,6 +337,10 @@ struct PlazaArgs {
     /// Output folder (created if needed).
     #[arg(long, value_name = "DIR", default_value = "plaza-replay")]
     out: PathBuf,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    force: bool,
     /// Not an option of a replay: accepted only to explain that it does not apply.
     #[arg(long, hide = true, value_name = "S")]
     seed: Option<String>,
@@ -294,10 +349,21 @@ struct PlazaArgs {
 /// A failure and its exit code.
 #[derive(Debug)]
 enum Failure {
-    /// Usage or configuration error: exit code 2.
+    /// Anything the user wrote (flags, scenario, data, output folder): exit code 2.
     Usage(anyhow::Error),
-    /// Failure while running: exit code 1.
+    /// A failure of fathom itself: exit code 1.
     Run(anyhow::Error),
+}
+
+/// The one exit-code rule: [`SimError::is_user_error`] decides; the message is the
+/// whole cause chain on one line.
+fn failure(e: SimError) -> Failure {
+    let line = anyhow!(one_line(&error_chain(&e)));
+    if e.is_user_error() {
+        Failure::Usage(line)
+    } else {
+        Failure::Run(line)
+    }
 }
 
 /// The settings text and its label: `--config` or the built-in preset. Checked here,
@@ -362,17 +428,15 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
         base_dir: std::env::current_dir()
             .context("cannot read the current directory")
             .map_err(Failure::Run)?,
+        force: args.force,
+        limits: Limits::default(),
     };
-    let (result, _) =
-        run_scenario_text(&text, &label, &options, &registry(), None).map_err(|e| {
-            let usage = matches!(e, SimError::InvalidArgument { .. });
-            let e = anyhow!(one_line(&error_chain(&e))).context("replay failed");
-            if usage {
-                Failure::Usage(e)
-            } else {
-                Failure::Run(e)
-            }
-        })?;
+    let (result, _) = run_scenario_text(&text, &label, &options, &registry(), None).map_err(
+        |e| match failure(e) {
+            Failure::Usage(e) => Failure::Usage(e.context("replay failed")),
+            Failure::Run(e) => Failure::Run(e.context("replay failed")),
+        },
+    )?;
     let s = &result.summary;
     let value = |m: &str, k: &str| s.row(m, k).map_or(f64::NAN, |r| r.value);
     let mut methods: Vec<&str> = Vec::new();
@@ -384,7 +448,7 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
     let mut text = format!("settings: {label}; data: {}\n\n", args.dir.display());
     text.push_str(&format!(
         "{:<22} {:>9} {:>9} {:>9} {:>9} {:>9}\n",
-        "method", "mean [m]", "std [m]", "max [m]", "rmse [m]", "rejected"
+        "method", "mean (m)", "std (m)", "max (m)", "rmse (m)", "rejected"
     ));
     for m in methods {
         text.push_str(&format!(
@@ -394,7 +458,7 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
             value(m, "std"),
             value(m, "max"),
             value(m, "rmse"),
-            value(m, "rejected")
+            value(m, "rejected").round()
         ));
     }
     text.push('\n');
@@ -535,29 +599,13 @@ fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
     }
 }
 
-fn usage_or_run(e: SimError) -> Failure {
-    let usage = matches!(
-        e,
-        SimError::InvalidArgument { .. }
-            | SimError::Invalid { .. }
-            | SimError::Toml { .. }
-            | SimError::Json { .. }
-    );
-    let e = anyhow!(one_line(&error_chain(&e)));
-    if usage {
-        Failure::Usage(e)
-    } else {
-        Failure::Run(e)
-    }
-}
-
 fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Failure> {
     let registry = registry();
     let label = args.scenario.display().to_string();
     let text = std::fs::read_to_string(&args.scenario)
         .with_context(|| format!("cannot read `{label}`"))
         .map_err(Failure::Usage)?;
-    let exp = peek_experiment(&text, &label, &registry).map_err(usage_or_run)?;
+    let exp = peek_experiment(&text, &label, &registry).map_err(failure)?;
     let out = args.out.clone().unwrap_or_else(|| {
         PathBuf::from("fathom-out").join(format!(
             "{}-shard-{}-of-{}",
@@ -574,21 +622,24 @@ fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Failure> {
         threads: args.threads,
         progress: None,
         env: Environment {
-            base_dir: std::env::current_dir()
-                .context("cannot read the current directory")
-                .map_err(Failure::Run)?,
+            limits: args.limits.limits()?,
+            ..Environment::new(
+                std::env::current_dir()
+                    .context("cannot read the current directory")
+                    .map_err(Failure::Run)?,
+            )
         },
     };
     let bar = progress_bar();
     let job = Job {
-        progress: bar.as_ref().map(|b| progress_hook(b, true)),
+        progress: Some(run_hook(bar.clone())),
         ..job
     };
-    let outcome = run_shard(exp, &job, shard, &out);
+    let outcome = run_shard(exp, &job, shard, &out, args.force);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    let m = outcome.map_err(usage_or_run)?;
+    let m = outcome.map_err(failure)?;
     let mut text = format!(
         "{} shard {}/{}: {:.1} s, manifest {}\n",
         m.experiment,
@@ -610,8 +661,15 @@ fn merge_cmd(args: &MergeArgs) -> Result<String, Failure> {
     let base_dir = std::env::current_dir()
         .context("cannot read the current directory")
         .map_err(Failure::Run)?;
-    let (result, m) =
-        merge(&registry(), &args.dirs, args.threads, &base_dir, &args.out).map_err(usage_or_run)?;
+    let (result, m) = merge(
+        &registry(),
+        &args.dirs,
+        args.threads,
+        &base_dir,
+        &args.out,
+        args.force,
+    )
+    .map_err(failure)?;
     Ok(format!(
         "merged {} shard folders of `{}` ({} runs): {} ({} figures, report.md, summary.json)\n",
         args.dirs.len(),
@@ -662,11 +720,10 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         return run_shard_cmd(args, shard);
     }
     let registry = registry();
-    // Scenario problems are usage errors (exit 2), reported on one line.
-    let (code, line) = check_command(&args.scenario, &registry);
-    if code != 0 {
-        return Err(Failure::Usage(anyhow!(line)));
-    }
+    let limits = args.limits.limits()?;
+    let label = args.scenario.display().to_string();
+    let text = std::fs::read_to_string(&args.scenario)
+        .map_err(|e| failure(SimError::io("read", &args.scenario, e)))?;
     let options = RunOptions {
         scenario: args.scenario.clone(),
         out_dir: args.out.clone(),
@@ -676,68 +733,112 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         base_dir: std::env::current_dir()
             .context("cannot read the current directory")
             .map_err(Failure::Run)?,
+        force: args.force,
+        limits,
     };
+    // Checked (scenario, overrides, cost against the limits) before anything runs;
+    // the estimate is printed first.
+    let exp = peek_experiment(&text, &label, &registry).map_err(failure)?;
+    let job = Job {
+        text: &text,
+        file: &label,
+        runs: args.runs,
+        seed: args.seed,
+        threads: args.threads,
+        progress: None,
+        env: Environment {
+            limits,
+            ..Environment::new(options.base_dir.clone())
+        },
+    };
+    let (resolved, cost) = exp.assess(&job).map_err(failure)?;
+    let what = match (resolved.runs, resolved.base_seed) {
+        (Some(n), Some(seed)) => format!("{n} runs, base seed {seed}"),
+        _ => "one deterministic replay".to_string(),
+    };
+    say(&format!(
+        "{} ({}): {what}; estimate: {}\n",
+        exp.name(),
+        exp.seed_doc(),
+        cost.summary()
+    ));
     let bar = progress_bar();
-    let hook = bar.as_ref().map(|b| progress_hook(b, true));
-    let outcome = run_scenario_with_progress(&options, &registry, hook);
+    let outcome = run_scenario_text(
+        &text,
+        &label,
+        &options,
+        &registry,
+        Some(run_hook(bar.clone())),
+    );
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
-    let (result, info) = outcome.map_err(|e| {
-        // a scenario value rejected while preparing (e.g. a world file that does not
-        // fit its path) is a configuration error too
-        let usage = matches!(
-            e,
-            SimError::InvalidArgument { .. } | SimError::Invalid { .. }
-        );
-        let e = anyhow!(one_line(&error_chain(&e)));
-        if usage {
-            Failure::Usage(e)
-        } else {
-            Failure::Run(e)
-        }
-    })?;
-    if let Some(reason) = &result.skipped {
-        // A scenario whose data folder is absent is the user's error, not an empty report.
-        return Err(Failure::Usage(anyhow!("{}: {reason}", info.experiment)));
-    }
-    let s = &result.summary;
+    let (result, info) = outcome.map_err(failure)?;
     let mut text = format!(
-        "{} ({}): {} runs, base seed {}, {:.1} s, fathom {}\n",
-        info.experiment,
-        s.seed_doc,
-        s.runs,
-        s.base_seed,
+        "done in {:.1} s (fathom {})\n",
         result.elapsed.as_secs_f64(),
         info.fathom_version
     );
-    const SHOWN_ROWS: usize = 20;
-    for row in s.rows.iter().take(SHOWN_ROWS) {
-        text.push_str(&format!(
-            "  {:<24} {:<28} {:>12.4}\n",
-            row.method, row.metric, row.value
-        ));
+    text.push_str(&console_setup(&result));
+    if let Some(reason) = &result.skipped {
+        text.push_str(&format!("skipped: {reason}\n"));
     }
-    if s.rows.len() > SHOWN_ROWS {
-        text.push_str(&format!(
-            "  ... {} more rows in report.md\n",
-            s.rows.len() - SHOWN_ROWS
-        ));
-    }
-    for c in &s.claims {
-        text.push_str(&format!(
-            "[{}] {}: {}\n",
-            if c.holds { "holds" } else { "does not hold" },
-            c.id,
-            c.text
-        ));
-    }
+    text.push_str(&console_rows(&result));
+    text.push_str(&console_claims(&result));
     text.push_str(&format!(
         "outputs: {} ({} figures, report.md, summary.json)\n",
         result.out_dir.display(),
         result.figures.len()
     ));
     Ok(text)
+}
+
+/// Prints `text` on standard output at once (also into a pipe).
+fn say(text: &str) {
+    let mut out = std::io::stdout().lock();
+    let _ = out.write_all(text.as_bytes());
+    let _ = out.flush();
+}
+
+/// The hook of `fathom run`: one line per finished Monte Carlo batch on standard
+/// output (printed above the progress bar, if one is drawn), and the bar.
+fn run_hook(bar: Option<ProgressBar>) -> Progress {
+    let bar_hook = bar.as_ref().map(|b| progress_hook(b, true));
+    // (batches finished, start of the current batch, its runs)
+    let state = Mutex::new((0usize, Instant::now(), 0usize));
+    Progress::new(move |event| {
+        let line = match &event {
+            ProgressEvent::BatchStarted { total, .. } => {
+                if let Ok(mut s) = state.lock() {
+                    s.1 = Instant::now();
+                    s.2 = *total;
+                }
+                None
+            }
+            ProgressEvent::BatchFinished { label } => state.lock().ok().map(|mut s| {
+                s.0 += 1;
+                batch_line(s.0, label, s.2, s.1.elapsed().as_secs_f64())
+            }),
+            ProgressEvent::RunFinished { .. } => None,
+        };
+        if let Some(h) = &bar_hook {
+            h.report(event);
+        }
+        if let Some(line) = line {
+            match &bar {
+                Some(b) => b.suspend(|| say(&line)),
+                None => say(&line),
+            }
+        }
+    })
+}
+
+/// `  batch 2 (beacons: layout far): 100 runs in 3.1 s`
+fn batch_line(n: usize, label: &str, runs: usize, seconds: f64) -> String {
+    format!(
+        "  batch {n} ({label}): {runs} run{} in {seconds:.1} s\n",
+        if runs == 1 { "" } else { "s" }
+    )
 }
 
 /// The progress bar of `fathom run` on standard error; `None` (nothing drawn) when
@@ -776,15 +877,15 @@ fn progress_hook(bar: &ProgressBar, draw: bool) -> Progress {
 
 fn check_cmd(args: &CheckArgs) -> Result<String, Failure> {
     let registry = registry();
-    let (code, line) = check_command(&args.scenario, &registry);
+    let limits = args.limits.limits()?;
+    let (code, line) = check_command_with(&args.scenario, &registry, &limits);
     if code != 0 {
         return Err(Failure::Usage(anyhow!(line)));
     }
     if args.quiet {
         return Ok(format!("{line}\n"));
     }
-    let resolved = check_scenario(&args.scenario, &registry)
-        .map_err(|e| Failure::Usage(anyhow!(one_line(&error_chain(&e)))))?;
+    let resolved = check_scenario_with(&args.scenario, &registry, &limits).map_err(failure)?;
     Ok(format!(
         "# {line}\n# resolved scenario (defaults filled in):\n{}",
         resolved.resolved_toml
@@ -1075,6 +1176,7 @@ mod tests {
             config: None,
             out: dir.join("out"),
             seed: None,
+            force: false,
         };
         assert!(matches!(replay_plaza(&args), Err(Failure::Usage(_))));
         std::fs::create_dir_all(dir.join("empty")).unwrap();
@@ -1082,9 +1184,10 @@ mod tests {
             dir: dir.join("empty"),
             ..args
         };
+        // A data folder without the data set is the user's input: exit code 2.
         match replay_plaza(&args) {
-            Err(Failure::Run(e)) => assert!(format!("{e:#}").contains("_DR.txt"), "{e:#}"),
-            other => panic!("expected a run failure, got {other:?}"),
+            Err(Failure::Usage(e)) => assert!(format!("{e:#}").contains("_DR.txt"), "{e:#}"),
+            other => panic!("expected a usage error, got {other:?}"),
         }
         // A seed does not apply to a deterministic replay: a usage error, not ignored.
         let args = PlazaArgs {

@@ -304,7 +304,7 @@ pub fn run(
                         seed,
                         threads,
                         progress: None,
-                        env: Environment { base_dir },
+                        env: Environment::new(base_dir),
                     })
                 })
                 .map_err(|e| to_py_err(&e))?;
@@ -327,6 +327,8 @@ pub fn run(
                 threads,
                 seed,
                 base_dir,
+                force: false,
+                limits: fathom_sim::cost::Limits::default(),
             };
             let (result, _) = py
                 .detach(|| {

@@ -129,6 +129,13 @@ pub enum SimError {
         source: Box<dyn std::error::Error + Send + Sync + 'static>,
     },
 
+    /// The user's input could not be used while preparing an experiment: a data
+    /// folder or file the scenario or the command line names is missing, unreadable
+    /// or malformed, or the scenario's values fail a model's own checks. Counted as
+    /// the user's error ([`SimError::is_user_error`]); the message is the cause's.
+    #[error(transparent)]
+    Input(Box<SimError>),
+
     /// An experiment's run function failed.
     #[error("experiment `{name}` failed")]
     Experiment {
@@ -151,6 +158,29 @@ impl SimError {
             file: file.into(),
             key_path: key_path.into(),
             reason: reason.into(),
+        }
+    }
+
+    /// Whether the error is in what the user wrote (flags, scenario, data path or
+    /// data): exit code 2 of the `fathom` command; anything else is a failure of fathom
+    /// itself (exit code 1). Reading a file the user named is the user's; writing an
+    /// output after the run was checked is fathom's.
+    pub fn is_user_error(&self) -> bool {
+        match self {
+            SimError::Toml { .. }
+            | SimError::Invalid { .. }
+            | SimError::InvalidArgument { .. }
+            | SimError::UnknownExperiment { .. }
+            | SimError::Input(_) => true,
+            SimError::Io { action, .. } => matches!(*action, "read" | "list directory"),
+            SimError::Experiment { source, .. } => source.is_user_error(),
+            // A file the user gave that is not valid JSON (a corrupted shard record);
+            // writing JSON never fails with these categories.
+            SimError::Json { source, .. } => matches!(
+                source.classify(),
+                serde_json::error::Category::Syntax | serde_json::error::Category::Eof
+            ),
+            _ => false,
         }
     }
 

@@ -36,6 +36,7 @@
 //!
 //! Modules:
 //! - [`scenario`]: TOML scenario loading with file / key / line error messages;
+//! - [`cost`]: a scenario's samples, memory and run time before it runs, and the limits;
 //! - [`montecarlo`]: [`run_monte_carlo`](montecarlo::run_monte_carlo) and its seeding rule;
 //! - [`output`]: [`Summary`](output::Summary) (`summary.json`), CSV and Markdown helpers;
 //! - [`progress`]: the progress hook of long Monte Carlo batches (the library never prints);
@@ -44,6 +45,7 @@
 //!   [`run_paper`];
 //! - [`experiments`]: the registered paper experiments.
 
+pub mod cost;
 pub mod data;
 pub mod driver;
 pub mod error;

@@ -38,7 +38,7 @@ pub fn parse_toml<T: DeserializeOwned>(text: &str, file_label: &str) -> Result<T
 
 /// Convert a `toml` deserialization error into a [`SimError::Toml`].
 fn toml_error(err: &toml::de::Error, text: &str, file_label: &str) -> SimError {
-    let message = err.message().trim().to_string();
+    let message = plain_types(err.message().trim());
     let table_keys = keys_from_error(err);
     // A missing field's span is its whole enclosing table: at the top level that is the
     // whole file, so a line number would only point at line 1; inside a table it is the
@@ -72,6 +72,32 @@ fn toml_error(err: &toml::de::Error, text: &str, file_label: &str) -> SimError {
         column,
         message,
     }
+}
+
+/// The `toml` / serde message with Rust type names said in words ("integer `-5`,
+/// expected usize" becomes "integer `-5`, expected a whole number >= 0").
+fn plain_types(message: &str) -> String {
+    let mut m = message.replace(" as i128", "").replace(" as u128", "");
+    for (rust, plain) in [
+        ("expected usize", "expected a whole number >= 0"),
+        (
+            "expected u64",
+            "expected a whole number from 0 to 9223372036854775807 (2^63 - 1)",
+        ),
+        (
+            "expected u32",
+            "expected a whole number from 0 to 4294967295",
+        ),
+        ("expected u16", "expected a whole number from 0 to 65535"),
+        ("expected u8", "expected a whole number from 0 to 255"),
+        ("expected i64", "expected a whole number"),
+        ("expected i32", "expected a whole number"),
+        ("expected f64", "expected a number"),
+        ("expected f32", "expected a number"),
+    ] {
+        m = m.replace(rust, plain);
+    }
+    m
 }
 
 /// The dotted key path the `toml` crate recorded for the error.
@@ -213,6 +239,95 @@ pub fn require_in_range(
     }
 }
 
+/// Largest magnitude of a position or length (keys ending in `_m`, and
+/// `positions`): 10⁷ m, beyond the Earth's radius, where ranges and their squares
+/// stop being meaningful.
+pub const MAX_LENGTH_M: f64 = 1e7;
+
+/// Largest noise σ (keys containing `sigma`), in the key's unit: 10⁶. Beyond it no
+/// sensor is described and σ² heads for overflow.
+pub const MAX_SIGMA: f64 = 1e6;
+
+/// Largest power spectral density (keys ending in `_psd`): 10¹², the square of
+/// [`MAX_SIGMA`].
+pub const MAX_PSD: f64 = 1e12;
+
+/// Checks the magnitudes that hold for every scenario, whatever the experiment:
+/// positions and lengths within [`MAX_LENGTH_M`], noise σ within [`MAX_SIGMA`], PSDs
+/// within [`MAX_PSD`] (by key name, see the units table of `docs/scenarios.md`).
+/// Values beyond them would make the geometry or the noise meaningless (a beacon at
+/// 10³⁰⁸ m gives non-finite ranges), so they are refused when the file is checked.
+///
+/// # Errors
+/// [`SimError::Invalid`] naming the key (with its array index) and the value.
+pub fn check_magnitudes(text: &str, file: &str) -> Result<(), SimError> {
+    let Ok(table) = toml::from_str::<toml::Table>(text) else {
+        // The typed parse reports syntax errors with their key and line.
+        return Ok(());
+    };
+    walk_table(&table, "", file)
+}
+
+fn walk_table(table: &toml::Table, prefix: &str, file: &str) -> Result<(), SimError> {
+    for (k, v) in table {
+        let path = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        walk_value(v, k, &path, file)?;
+    }
+    Ok(())
+}
+
+fn walk_value(v: &toml::Value, key: &str, path: &str, file: &str) -> Result<(), SimError> {
+    match v {
+        toml::Value::Table(t) => walk_table(t, path, file),
+        toml::Value::Array(a) => {
+            for (i, item) in a.iter().enumerate() {
+                walk_value(item, key, &format!("{path}[{i}]"), file)?;
+            }
+            Ok(())
+        }
+        toml::Value::Float(x) => check_magnitude(*x, key, path, file),
+        toml::Value::Integer(i) => check_magnitude(*i as f64, key, path, file),
+        _ => Ok(()),
+    }
+}
+
+fn check_magnitude(x: f64, key: &str, path: &str, file: &str) -> Result<(), SimError> {
+    let (limit, what) = if key.contains("sigma") {
+        (
+            MAX_SIGMA,
+            "a noise σ beyond 1e6 (in the key's unit) describes no sensor",
+        )
+    } else if key.ends_with("_psd") {
+        (
+            MAX_PSD,
+            "a spectral density beyond 1e12 describes no sensor",
+        )
+    } else if key.ends_with("_m") || key == "positions" {
+        (
+            MAX_LENGTH_M,
+            "positions and lengths beyond 1e7 m (more than the Earth's radius) make ranges meaningless",
+        )
+    } else {
+        return Ok(());
+    };
+    // NaN and infinities are left to the experiment's own range checks.
+    if x.is_finite() && x.abs() > limit {
+        return Err(SimError::invalid(
+            file,
+            path,
+            format!(
+                "must be at most {limit:e} in magnitude, got {}: {what}",
+                crate::cost::short(x)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// Check the top-level `experiment` key of a scenario file names `expected`.
 ///
 /// # Errors
@@ -306,6 +421,23 @@ mod tests {
     }
 
     #[test]
+    fn messages_say_types_in_words() {
+        assert_eq!(
+            plain_types("invalid type: integer `99999999999999999999` as i128, expected u64"),
+            "invalid type: integer `99999999999999999999`, expected a whole number from 0 to \
+             9223372036854775807 (2^63 - 1)"
+        );
+        assert_eq!(
+            plain_types("invalid value: integer `-5`, expected usize"),
+            "invalid value: integer `-5`, expected a whole number >= 0"
+        );
+        assert_eq!(
+            plain_types("invalid type: string \"a\", expected f64"),
+            "invalid type: string \"a\", expected a number"
+        );
+    }
+
+    #[test]
     fn wrong_type_names_file_key_and_line() {
         let (_, s) = err_text("name = \"a\"\n[noise]\nrange_sigma = \"x\"\nruns = 3\n");
         println!("{s}");
@@ -374,6 +506,32 @@ mod tests {
         assert_eq!(line_col("ab\ncd", 0), (1, 1));
         assert_eq!(line_col("ab\ncd", 4), (2, 2));
         assert_eq!(line_col("ab\ncd", 99), (2, 3));
+    }
+
+    #[test]
+    fn magnitudes_beyond_any_sensor_or_place_are_refused_with_their_key() {
+        let ok = "[a]\nx_m = 1e6\nsigma_m = 3.0\npositions = [[1.0, 2.0, 3.0]]\nn = 1e300\n";
+        assert!(check_magnitudes(ok, "f").is_ok());
+        for (text, key) in [
+            (
+                "[beacons]\npositions = [[0.0, 1e308, 0.0]]\n",
+                "beacons.positions[0][1]",
+            ),
+            ("[noise]\nrange_sigma_m = 1e200\n", "noise.range_sigma_m"),
+            ("velocity_sigma = [0.1, -2e6]\n", "velocity_sigma[1]"),
+            ("[f]\naccel_psd = 1e13\n", "f.accel_psd"),
+            ("[m]\nsearch_depth_m = -2e7\n", "m.search_depth_m"),
+        ] {
+            let e = check_magnitudes(text, "f.toml").unwrap_err().to_string();
+            assert!(
+                e.starts_with(&format!("f.toml: key `{key}`: must be at most")),
+                "{e}"
+            );
+            // The value is shown short (`1.0e308`), not as 309 digits.
+            assert!(e.len() < 200, "{e}");
+        }
+        // Non-finite values are left to the range checks (which name them).
+        assert!(check_magnitudes("x_m = nan\n", "f").is_ok());
     }
 
     #[test]

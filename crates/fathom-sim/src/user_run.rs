@@ -10,15 +10,15 @@
 
 use std::path::{Path, PathBuf};
 
-use serde::{Deserialize, Serialize};
+use serde::Deserialize;
 
-use crate::driver::{ExperimentResult, error_chain, execute_into};
+use crate::cost::{Cost, Limits};
+use crate::driver::{ExperimentResult, WriteOptions, error_chain, execute_to};
 use crate::error::SimError;
 use crate::experiment::{DynExperiment, Environment, Job};
 use crate::progress::Progress;
 
-/// Marker file written by [`run_scenario`] into its output directory.
-pub const RUN_INFO_FILE: &str = "run_info.json";
+pub use crate::driver::{RUN_INFO_FILE, RunInfo};
 
 /// The top-level `experiment` key, read leniently (other keys are ignored here).
 #[derive(Debug, Deserialize)]
@@ -74,7 +74,7 @@ pub fn peek_experiment<'r>(
 }
 
 /// The result of [`check_scenario`].
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CheckedScenario {
     /// The experiment the scenario is for.
     pub experiment: String,
@@ -85,20 +85,39 @@ pub struct CheckedScenario {
     pub keys: usize,
     /// Number of tables (including tables inside arrays of tables).
     pub tables: usize,
+    /// The estimated cost (on all cores), within the limits.
+    pub cost: Cost,
 }
 
-/// Parse and validate a scenario text without running it (`fathom check`).
+/// Parse and validate a scenario text without running it (`fathom check`), with the
+/// default [`Limits`].
 ///
 /// # Errors
 /// As [`peek_experiment`], then the experiment's own parse and check errors
-/// ([`SimError::Toml`] with key path and line, [`SimError::Invalid`] with key path).
+/// ([`SimError::Toml`] with key path and line, [`SimError::Invalid`] with key path),
+/// then a cost beyond the limits ([`SimError::Invalid`] naming the key).
 pub fn check_scenario_text(
     text: &str,
     file: &str,
     registry: &[&'static dyn DynExperiment],
 ) -> Result<CheckedScenario, SimError> {
+    check_scenario_text_with(text, file, registry, &Limits::default())
+}
+
+/// [`check_scenario_text`] against `limits`.
+///
+/// # Errors
+/// As [`check_scenario_text`].
+pub fn check_scenario_text_with(
+    text: &str,
+    file: &str,
+    registry: &[&'static dyn DynExperiment],
+    limits: &Limits,
+) -> Result<CheckedScenario, SimError> {
     let exp = peek_experiment(text, file, registry)?;
     let resolved_toml = exp.resolve(text, file, None, None)?.toml;
+    let cost = exp.cost(text, file, None, None, None)?;
+    cost.check(limits, file)?;
     let value: toml::Table = toml::from_str(&resolved_toml)
         .map_err(|e| SimError::invalid_argument(format!("resolved `{file}`"), e.to_string()))?;
     let (keys, tables) = count_keys(&toml::Value::Table(value));
@@ -107,6 +126,7 @@ pub fn check_scenario_text(
         resolved_toml,
         keys,
         tables,
+        cost,
     })
 }
 
@@ -118,8 +138,20 @@ pub fn check_scenario(
     path: &Path,
     registry: &[&'static dyn DynExperiment],
 ) -> Result<CheckedScenario, SimError> {
+    check_scenario_with(path, registry, &Limits::default())
+}
+
+/// [`check_scenario`] against `limits`.
+///
+/// # Errors
+/// As [`check_scenario`].
+pub fn check_scenario_with(
+    path: &Path,
+    registry: &[&'static dyn DynExperiment],
+    limits: &Limits,
+) -> Result<CheckedScenario, SimError> {
     let text = std::fs::read_to_string(path).map_err(|e| SimError::io("read", path, e))?;
-    check_scenario_text(&text, &path.display().to_string(), registry)
+    check_scenario_text_with(&text, &path.display().to_string(), registry, limits)
 }
 
 /// Exit code of `fathom check` / `fathom run` for an invalid scenario or bad arguments.
@@ -129,15 +161,25 @@ pub const EXIT_USAGE: u8 = 2;
 /// [`EXIT_USAGE`] = invalid). The error line names the file, the key path and, for
 /// TOML errors, the line; it is always one line.
 pub fn check_command(path: &Path, registry: &[&'static dyn DynExperiment]) -> (u8, String) {
-    match check_scenario(path, registry) {
+    check_command_with(path, registry, &Limits::default())
+}
+
+/// [`check_command`] against `limits`; the OK line carries the cost estimate.
+pub fn check_command_with(
+    path: &Path,
+    registry: &[&'static dyn DynExperiment],
+    limits: &Limits,
+) -> (u8, String) {
+    match check_scenario_with(path, registry, limits) {
         Ok(c) => (
             0,
             format!(
-                "OK {}: experiment `{}`, {} keys in {} tables",
+                "OK {}: experiment `{}`, {} keys in {} tables; {}",
                 path.display(),
                 c.experiment,
                 c.keys,
-                c.tables
+                c.tables,
+                c.cost.summary()
             ),
         ),
         Err(e) => (EXIT_USAGE, one_line(&error_chain(&e))),
@@ -165,35 +207,8 @@ fn count_keys(v: &toml::Value) -> (usize, usize) {
     }
 }
 
-/// What [`run_scenario`] writes into `run_info.json`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct RunInfo {
-    /// `fathom` version (the workspace version of `fathom-sim`).
-    pub fathom_version: String,
-    /// The experiment run.
-    pub experiment: String,
-    /// The scenario file as given.
-    pub scenario: String,
-    /// `--runs` override, if any.
-    pub runs: Option<usize>,
-    /// `--threads`, if given.
-    pub threads: Option<usize>,
-    /// `--seed` override, if given.
-    #[serde(default)]
-    pub seed: Option<u64>,
-    /// The base seed the runs actually used (the scenario's `base_seed`, or `--seed`);
-    /// `None` for a deterministic experiment (no `base_seed`, e.g. `plaza`). The same
-    /// value is in `scenario.resolved.toml` and `summary.json`.
-    #[serde(default)]
-    pub base_seed: Option<u64>,
-    /// Wall-clock time of the experiment, s (kept here, not in `summary.json`, which
-    /// is byte-identical for the same scenario and seed).
-    #[serde(default)]
-    pub elapsed_s: f64,
-}
-
 /// Options of [`run_scenario`].
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct RunOptions {
     /// The scenario file.
     pub scenario: PathBuf,
@@ -209,17 +224,21 @@ pub struct RunOptions {
     /// Where relative data folders of a scenario are looked up (the experiment's
     /// `workspace_root`; `fathom run` passes the current directory).
     pub base_dir: PathBuf,
+    /// Write into a folder holding files fathom did not write, keeping them
+    /// (`--force`).
+    pub force: bool,
+    /// The limits the scenario's cost must fit (`--max-memory-gb`, `--max-hours`).
+    pub limits: Limits,
 }
 
 /// Check, then run a user's scenario file with its experiment; writes the experiment's
 /// outputs (figures, CSV, `summary.json`, `report.md`) plus `scenario.toml` (the file
 /// as given), `scenario.resolved.toml` (defaults filled in, `base_seed` = the seed
 /// actually used, so running it reproduces the results) and `run_info.json` into the
-/// output directory.
-///
-/// A non-empty output directory is only reused when it holds a `run_info.json` of an
-/// earlier `fathom run` (its stale outputs are then removed), so `--out .` cannot
-/// delete unrelated files.
+/// output directory, through [`crate::driver::outdir`]: a folder holding files fathom
+/// did not write is refused (kept with `force`), one that another process writes is
+/// refused, and the previous outputs are replaced only once the new ones are
+/// complete.
 ///
 /// # Errors
 /// Check errors as [`check_scenario`], bad `--runs` / `--threads` / `--seed`
@@ -242,25 +261,6 @@ pub fn run_scenario_with_progress(
     registry: &[&'static dyn DynExperiment],
     progress: Option<Progress>,
 ) -> Result<(ExperimentResult, RunInfo), SimError> {
-    if options.seed.is_some_and(|s| i64::try_from(s).is_err()) {
-        return Err(SimError::invalid_argument(
-            "--seed",
-            format!(
-                "must be at most {} (the largest TOML integer, so that the resolved scenario \
-                 can record it)",
-                i64::MAX
-            ),
-        ));
-    }
-    if options.runs == Some(0) {
-        return Err(SimError::invalid_argument("--runs", "must be at least 1"));
-    }
-    if options.threads == Some(0) {
-        return Err(SimError::invalid_argument(
-            "--threads",
-            "must be at least 1",
-        ));
-    }
     let path = &options.scenario;
     let label = path.display().to_string();
     let text = std::fs::read_to_string(path).map_err(|e| SimError::io("read", path, e))?;
@@ -279,83 +279,48 @@ pub fn run_scenario_text(
     registry: &[&'static dyn DynExperiment],
     progress: Option<Progress>,
 ) -> Result<(ExperimentResult, RunInfo), SimError> {
-    let label = label.to_string();
-    let exp = peek_experiment(text, &label, registry)?;
-    // Checked (with the overrides) before the output folder is touched.
-    exp.resolve(text, &label, options.runs, options.seed)?;
+    if options.seed.is_some_and(|s| i64::try_from(s).is_err()) {
+        return Err(SimError::invalid_argument(
+            "--seed",
+            format!(
+                "must be at most {} (2^63 - 1, the largest TOML integer, so that the resolved \
+                 scenario can record it)",
+                i64::MAX
+            ),
+        ));
+    }
+    if options.runs == Some(0) {
+        return Err(SimError::invalid_argument("--runs", "must be at least 1"));
+    }
+    if options.threads == Some(0) {
+        return Err(SimError::invalid_argument(
+            "--threads",
+            "must be at least 1",
+        ));
+    }
+    let exp = peek_experiment(text, label, registry)?;
     let out_dir = options
         .out_dir
         .clone()
         .unwrap_or_else(|| Path::new("fathom-out").join(exp.name()));
-    prepare_out_dir(&out_dir)?;
     let job = Job {
         text,
-        file: &label,
+        file: label,
         runs: options.runs,
         seed: options.seed,
         threads: options.threads,
         progress,
         env: Environment {
-            base_dir: options.base_dir.clone(),
+            limits: options.limits,
+            ..Environment::new(options.base_dir.clone())
         },
     };
-    let result = execute_into(exp, &job, &out_dir)?;
-    crate::output::write_text(out_dir.join("scenario.toml"), text)?;
-    crate::output::write_text(
-        out_dir.join("scenario.resolved.toml"),
-        &(resolved_header(exp.name()) + &result.resolved_toml),
-    )?;
-    let deterministic = exp.resolve(text, &label, None, None)?.base_seed.is_none();
-    let info = RunInfo {
-        fathom_version: env!("CARGO_PKG_VERSION").to_string(),
-        experiment: exp.name().to_string(),
-        scenario: label,
-        runs: options.runs,
-        threads: options.threads,
-        seed: options.seed,
-        base_seed: (!deterministic).then_some(result.summary.base_seed),
-        elapsed_s: result.elapsed.as_secs_f64(),
+    let write = WriteOptions {
+        force: options.force,
+        command: "run".into(),
+        scenario_files: true,
     };
-    let json = serde_json::to_string_pretty(&info)
-        .map_err(|e| SimError::invalid_argument("run_info.json", e.to_string()))?;
-    crate::output::write_text(out_dir.join(RUN_INFO_FILE), &(json + "\n"))?;
-    Ok((result, info))
-}
-
-/// The comment lines written above the resolved scenario: where it comes from and the
-/// command that reproduces the run (the overrides are folded into the file).
-fn resolved_header(experiment: &str) -> String {
-    format!(
-        "# Resolved `{experiment}` scenario written by `fathom run` (fathom {}): defaults filled\n\
-         # in, `--runs` and `--seed` folded in. Reproduce the run with\n\
-         #   fathom run scenario.resolved.toml\n\n",
-        env!("CARGO_PKG_VERSION")
-    )
-}
-
-/// Create `dir`, or accept it if empty or made by an earlier `fathom run`; then remove
-/// the outputs of that earlier run.
-fn prepare_out_dir(dir: &Path) -> Result<(), SimError> {
-    std::fs::create_dir_all(dir).map_err(|e| SimError::io("create directory", dir, e))?;
-    let mut entries = std::fs::read_dir(dir).map_err(|e| SimError::io("list directory", dir, e))?;
-    let empty = entries.next().is_none();
-    if !empty && !dir.join(RUN_INFO_FILE).is_file() {
-        return Err(SimError::invalid_argument(
-            "--out",
-            format!(
-                "`{}` is not empty and holds no {RUN_INFO_FILE} of an earlier `fathom run`; \
-                 choose a new or empty folder",
-                dir.display()
-            ),
-        ));
-    }
-    for name in [RUN_INFO_FILE, "scenario.toml", "scenario.resolved.toml"] {
-        let p = dir.join(name);
-        if p.is_file() {
-            std::fs::remove_file(&p).map_err(|e| SimError::io("remove", &p, e))?;
-        }
-    }
-    Ok(())
+    execute_to(exp, &job, &out_dir, &write)
 }
 
 #[cfg(test)]
@@ -410,6 +375,8 @@ mod tests {
             threads: None,
             seed: Some(5),
             base_dir: root(),
+            force: false,
+            limits: Limits::default(),
         };
         let reg = experiments::registry();
         let e = run_scenario(&options, &reg).unwrap_err();

@@ -19,7 +19,7 @@ use std::time::Instant;
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
-use super::{ExperimentResult, write_executed};
+use super::{ExperimentResult, OutDir, RunInfo, write_executed};
 use crate::SimError;
 use crate::experiment::{Batch, DynExperiment, FoundRecord, Job, RecordSink, RecordSource, Shard};
 
@@ -126,16 +126,19 @@ impl RecordSink for FileSink {
     }
 }
 
-/// Runs shard `shard` of `exp` on `job` into the folder `dir` (created; it must not
-/// exist or be empty): the record files and `manifest.json`.
+/// Runs shard `shard` of `exp` on `job` into the folder `dir`: the record files and
+/// `manifest.json`, written like every output folder ([`super::outdir`]: a folder
+/// holding files fathom did not write is refused unless `force`, and an earlier
+/// shard's folder is replaced only once the new records are complete).
 ///
 /// # Errors
-/// A folder that is not empty, the experiment's errors, I/O errors.
+/// A refused folder, the experiment's errors, I/O errors.
 pub fn run_shard(
     exp: &dyn DynExperiment,
     job: &Job<'_>,
     shard: Shard,
     dir: &Path,
+    force: bool,
 ) -> Result<Manifest, SimError> {
     if shard.count == 0 || shard.index >= shard.count {
         return Err(SimError::invalid_argument(
@@ -143,24 +146,11 @@ pub fn run_shard(
             format!("K/M needs 0 <= K < M, got {}/{}", shard.index, shard.count),
         ));
     }
-    if dir.exists()
-        && std::fs::read_dir(dir)
-            .map_err(|e| SimError::io("list directory", dir, e))?
-            .next()
-            .is_some()
-    {
-        return Err(SimError::invalid_argument(
-            "--out",
-            format!(
-                "`{}` is not empty; a shard writes into a new or empty folder",
-                dir.display()
-            ),
-        ));
-    }
-    std::fs::create_dir_all(dir).map_err(|e| SimError::io("create directory", dir, e))?;
+    exp.assess(job)?;
+    let claim = OutDir::claim(dir, force)?;
     let start = Instant::now();
     let mut sink = FileSink {
-        dir: dir.to_path_buf(),
+        dir: claim.dir().to_path_buf(),
         current: None,
         batches: Vec::new(),
     };
@@ -182,7 +172,19 @@ pub fn run_shard(
         path: dir.join("manifest.json"),
         source: e,
     })?;
-    crate::output::write_text(dir.join("manifest.json"), &(json + "\n"))?;
+    crate::output::write_text(claim.dir().join("manifest.json"), &(json + "\n"))?;
+    claim.commit(RunInfo {
+        fathom_version: manifest.fathom_version.clone(),
+        command: "shard".into(),
+        experiment: manifest.experiment.clone(),
+        scenario: job.file.to_string(),
+        runs: job.runs,
+        threads: job.threads,
+        seed: job.seed,
+        base_seed: manifest.base_seed,
+        elapsed_s: manifest.elapsed_s,
+        files: Vec::new(),
+    })?;
     Ok(manifest)
 }
 
@@ -347,19 +349,22 @@ impl RecordSource for FileSource {
 }
 
 /// Merges the shard folders `dirs` into the outputs of one run written to `out_dir`
-/// (the same files as a single-process run: summary.json, report.md, figures, CSV).
-/// The outputs are first written to a temporary folder beside `out_dir` and renamed
-/// into place, so a failed merge leaves nothing half-written.
+/// (the same files as a single-process run: summary.json, report.md, figures, CSV),
+/// written like every output folder ([`super::outdir`]): a folder holding files fathom
+/// did not write is refused unless `force`, and nothing is replaced before the merge
+/// is complete.
 ///
 /// # Errors
 /// Manifests that disagree, a run missing or duplicated, a corrupted record file (each
-/// naming the shard or the file and line), the experiment's errors, I/O errors.
+/// naming the shard or the file and line), a refused output folder, the experiment's
+/// errors, I/O errors.
 pub fn merge(
     registry: &[&'static dyn DynExperiment],
     dirs: &[PathBuf],
     threads: Option<usize>,
     base_dir: &Path,
     out_dir: &Path,
+    force: bool,
 ) -> Result<(ExperimentResult, Manifest), SimError> {
     let mut shards = Vec::with_capacity(dirs.len());
     for d in dirs {
@@ -384,10 +389,10 @@ pub fn merge(
         seed: None,
         threads,
         progress: None,
-        env: crate::experiment::Environment {
-            base_dir: base_dir.to_path_buf(),
-        },
+        env: crate::experiment::Environment::new(base_dir),
     };
+    exp.assess(&job)?;
+    let claim = OutDir::claim(out_dir, force)?;
     let start = Instant::now();
     let mut source = FileSource {
         order,
@@ -397,15 +402,27 @@ pub fn merge(
     };
     let executed = exp.execute_from(&job, &mut source)?;
     let elapsed = start.elapsed();
-    let mut result = super::write_atomically(out_dir, |tmp| {
-        write_executed(&executed, &first.scenario_label, tmp, elapsed)
+    let setup = super::Setup::of(exp, &executed.resolved.toml);
+    let mut result = write_executed(
+        &executed,
+        &first.scenario_label,
+        &setup,
+        claim.dir(),
+        elapsed,
+    )?;
+    result.relocate(&claim);
+    claim.commit(RunInfo {
+        fathom_version: env!("CARGO_PKG_VERSION").to_string(),
+        command: "merge".into(),
+        experiment: first.experiment.clone(),
+        scenario: first.scenario_label.clone(),
+        runs: executed.resolved.runs,
+        threads,
+        seed: None,
+        base_seed: first.base_seed,
+        elapsed_s: elapsed.as_secs_f64(),
+        files: Vec::new(),
     })?;
-    result.out_dir = out_dir.to_path_buf();
-    for f in &mut result.figures {
-        if let Some(name) = f.file_name() {
-            *f = out_dir.join(name);
-        }
-    }
     Ok((result, first))
 }
 

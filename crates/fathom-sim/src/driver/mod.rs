@@ -1,22 +1,31 @@
 //! The driver: runs any registered experiment through one pipeline and writes its
-//! outputs. [`execute_into`] is what `cargo xtask paper` ([`run_paper`]) and `fathom
-//! run` ([`crate::user_run`]) do per experiment:
+//! outputs. [`execute_to`] is what `cargo xtask paper` ([`run_paper`]), `fathom run`
+//! and `fathom replay` ([`crate::user_run`]) do per experiment, and `fathom merge`
+//! ([`campaign`]) writes the same way:
 //!
-//! 1. [`DynExperiment::execute`]: parse the scenario, apply `--runs` / `--seed`,
-//!    check, prepare, run the Monte Carlo batches, analyse;
-//! 2. remove the stale outputs of an earlier run directly in the output directory
-//!    (`*.svg`, `*.csv`, `*.json`, `*.md`; sub-directories are left alone);
-//! 3. write the experiment's figures and CSV files, `summary.json` and `report.md`
-//!    (header, the side-by-side table, the claims, the experiment's notes, links to
-//!    the figures).
+//! 1. [`DynExperiment::assess`]: parse the scenario, apply `--runs` / `--seed`, check,
+//!    estimate the cost against the limits;
+//! 2. [`OutDir::claim`]: lock the output folder, refuse one holding files fathom did
+//!    not write (unless forced) and check that it can be written ([`outdir`]);
+//! 3. [`DynExperiment::execute`]: prepare, run the Monte Carlo batches, analyse;
+//! 4. write the experiment's figures and CSV files, `summary.json` and `report.md`
+//!    (header, the table, the claims, the experiment's notes, links to the figures)
+//!    into the claimed temporary folder, then [`OutDir::commit`] moves it into place
+//!    with its `run_info.json`.
+//!
+//! Nothing is written before step 2 and the previous outputs are replaced only in
+//! step 4, once everything is written.
 
 pub mod campaign;
+pub mod outdir;
 mod paper;
 mod report;
+mod setup;
 mod single_run;
 #[cfg(test)]
 mod tests;
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -24,8 +33,13 @@ use crate::SimError;
 use crate::experiment::{DynExperiment, Executed, Job};
 use crate::output::{Summary, write_summary_json, write_text, write_with};
 
+pub use outdir::{OutDir, RUN_INFO_FILE, RunInfo, write_file_atomically};
+pub use setup::Setup;
+
 pub use paper::{PaperOptions, PaperResult, run_paper, run_paper_to};
-pub use report::{TABLE_DECIMALS, console_section};
+pub use report::{
+    TABLE_DECIMALS, console_claims, console_rows, console_section, console_setup, fmt_value,
+};
 pub use single_run::SingleRun;
 
 /// The outcome of one experiment written by [`execute_into`].
@@ -45,6 +59,10 @@ pub struct ExperimentResult {
     pub resolved_toml: String,
     /// Why the experiment was skipped, if it was (e.g. its data folder is absent).
     pub skipped: Option<String>,
+    /// The unit of each metric, as the experiment declared it.
+    pub units: BTreeMap<String, String>,
+    /// Whether the scenario is the paper's setup, or which keys differ from it.
+    pub setup: Setup,
 }
 
 /// The whole error chain of `e` joined with `": "` (like anyhow's `{:#}`).
@@ -59,27 +77,111 @@ pub fn error_chain(e: &(dyn std::error::Error + 'static)) -> String {
     out
 }
 
-/// Executes `exp` on `job` and writes every output into `out_dir` (created if
-/// needed); `scenario_label` names the scenario in the report header.
+/// How [`execute_to`] writes its outputs.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct WriteOptions {
+    /// Write into a folder holding files fathom did not write, keeping them (only
+    /// fathom's own files are replaced).
+    pub force: bool,
+    /// The command recorded in `run_info.json` (`run`, `replay`, `paper`, ...).
+    pub command: String,
+    /// Also write the scenario as given (`scenario.toml`) and resolved
+    /// (`scenario.resolved.toml`, defaults, `--runs` and `--seed` folded in).
+    pub scenario_files: bool,
+}
+
+impl Default for WriteOptions {
+    fn default() -> Self {
+        WriteOptions {
+            force: false,
+            command: "run".into(),
+            scenario_files: false,
+        }
+    }
+}
+
+/// Executes `exp` on `job` and writes every output into `out_dir` (see the module
+/// docs; [`execute_to`] with the default [`WriteOptions`]).
 ///
 /// # Errors
-/// The experiment's errors, then I/O errors.
+/// As [`execute_to`].
 pub fn execute_into(
     exp: &dyn DynExperiment,
     job: &Job<'_>,
     out_dir: &Path,
 ) -> Result<ExperimentResult, SimError> {
+    execute_to(exp, job, out_dir, &WriteOptions::default()).map(|(r, _)| r)
+}
+
+/// Executes `exp` on `job` and writes every output into `out_dir`: assess, claim the
+/// folder, execute, write, commit (see the module docs).
+///
+/// # Errors
+/// The scenario's and the options' errors and a refused output folder (all before
+/// anything is computed or written), then the experiment's errors, then I/O errors.
+pub fn execute_to(
+    exp: &dyn DynExperiment,
+    job: &Job<'_>,
+    out_dir: &Path,
+    options: &WriteOptions,
+) -> Result<(ExperimentResult, RunInfo), SimError> {
+    exp.assess(job)?;
+    let claim = OutDir::claim(out_dir, options.force)?;
     let start = Instant::now();
     let executed = exp.execute(job)?;
     let elapsed = start.elapsed();
-    std::fs::create_dir_all(out_dir).map_err(|e| SimError::io("create directory", out_dir, e))?;
-    clear_stale_outputs(out_dir)?;
-    write_executed(&executed, job.file, out_dir, elapsed)
+    let setup = Setup::of(exp, &executed.resolved.toml);
+    let mut result = write_executed(&executed, job.file, &setup, claim.dir(), elapsed)?;
+    if options.scenario_files {
+        write_text(claim.dir().join("scenario.toml"), job.text)?;
+        write_text(
+            claim.dir().join("scenario.resolved.toml"),
+            &(resolved_header(exp.name()) + &result.resolved_toml),
+        )?;
+    }
+    let deterministic = executed.resolved.base_seed.is_none();
+    let mut info = RunInfo {
+        fathom_version: env!("CARGO_PKG_VERSION").to_string(),
+        command: options.command.clone(),
+        experiment: exp.name().to_string(),
+        scenario: job.file.to_string(),
+        runs: job.runs,
+        threads: job.threads,
+        seed: job.seed,
+        base_seed: (!deterministic).then_some(result.summary.base_seed),
+        elapsed_s: elapsed.as_secs_f64(),
+        files: Vec::new(),
+    };
+    result.relocate(&claim);
+    info.files = claim.commit(info.clone())?;
+    Ok((result, info))
+}
+
+/// The comment lines written above the resolved scenario: where it comes from and the
+/// command that reproduces the run (the overrides are folded into the file).
+fn resolved_header(experiment: &str) -> String {
+    format!(
+        "# Resolved `{experiment}` scenario written by fathom {}: defaults filled\n\
+         # in, `--runs` and `--seed` folded in. Reproduce the run with\n\
+         #   fathom run scenario.resolved.toml\n\n",
+        env!("CARGO_PKG_VERSION")
+    )
+}
+
+impl ExperimentResult {
+    /// Points the paths written into a claimed folder at their place after the commit.
+    pub(crate) fn relocate(&mut self, claim: &OutDir) {
+        self.out_dir = claim.path().to_path_buf();
+        for f in &mut self.figures {
+            *f = claim.final_path(f);
+        }
+    }
 }
 
 pub(crate) fn write_executed(
     executed: &Executed,
     scenario_label: &str,
+    setup: &Setup,
     out_dir: &Path,
     elapsed: Duration,
 ) -> Result<ExperimentResult, SimError> {
@@ -94,7 +196,8 @@ pub(crate) fn write_executed(
     figures.sort();
     let summary = &executed.summary;
     write_summary_json(out_dir.join("summary.json"), summary)?;
-    let md = report::experiment_report(summary, scenario_label, &executed.analysis, &figures);
+    let md =
+        report::experiment_report(summary, scenario_label, &executed.analysis, setup, &figures);
     write_text(out_dir.join("report.md"), &md)?;
     Ok(ExperimentResult {
         name: summary.experiment.clone(),
@@ -104,65 +207,7 @@ pub(crate) fn write_executed(
         elapsed,
         resolved_toml: executed.resolved.toml.clone(),
         skipped: executed.analysis.skipped.clone(),
+        units: executed.analysis.units.clone(),
+        setup: setup.clone(),
     })
-}
-
-/// Writes a set of outputs into a fresh folder beside `out_dir` with `write`, then
-/// moves it into place (an existing `out_dir` is replaced only after the new one is
-/// complete), so an error or an interrupted write leaves `out_dir` as it was.
-///
-/// # Errors
-/// `write`'s errors, I/O errors.
-pub(crate) fn write_atomically<T>(
-    out_dir: &Path,
-    write: impl FnOnce(&Path) -> Result<T, SimError>,
-) -> Result<T, SimError> {
-    let name = out_dir
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "out".into());
-    let parent = out_dir.parent().filter(|p| !p.as_os_str().is_empty());
-    let sibling = |tag: &str| {
-        let n = format!(".{name}.{tag}-{}", std::process::id());
-        parent.map_or_else(|| PathBuf::from(&n), |p| p.join(&n))
-    };
-    let tmp = sibling("partial");
-    if tmp.exists() {
-        std::fs::remove_dir_all(&tmp).map_err(|e| SimError::io("remove", &tmp, e))?;
-    }
-    std::fs::create_dir_all(&tmp).map_err(|e| SimError::io("create directory", &tmp, e))?;
-    let value = match write(&tmp) {
-        Ok(v) => v,
-        Err(e) => {
-            let _ = std::fs::remove_dir_all(&tmp);
-            return Err(e);
-        }
-    };
-    let old = sibling("old");
-    if out_dir.exists() {
-        std::fs::rename(out_dir, &old).map_err(|e| SimError::io("move aside", out_dir, e))?;
-    }
-    std::fs::rename(&tmp, out_dir).map_err(|e| SimError::io("move into place", out_dir, e))?;
-    if old.exists() {
-        std::fs::remove_dir_all(&old).map_err(|e| SimError::io("remove", &old, e))?;
-    }
-    Ok(value)
-}
-
-/// Remove the outputs a previous run left directly in `dir`.
-fn clear_stale_outputs(dir: &Path) -> Result<(), SimError> {
-    let entries = std::fs::read_dir(dir).map_err(|e| SimError::io("list directory", dir, e))?;
-    for entry in entries {
-        let entry = entry.map_err(|e| SimError::io("list directory", dir, e))?;
-        let path = entry.path();
-        let is_output = path.is_file()
-            && path
-                .extension()
-                .and_then(|x| x.to_str())
-                .is_some_and(|x| matches!(x, "svg" | "csv" | "json" | "md"));
-        if is_output {
-            std::fs::remove_file(&path).map_err(|e| SimError::io("remove", &path, e))?;
-        }
-    }
-    Ok(())
 }

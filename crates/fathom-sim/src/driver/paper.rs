@@ -11,10 +11,10 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 
 use super::report::{console_section, demote_headings, rebase_links};
-use super::{ExperimentResult, error_chain, execute_into};
+use super::{ExperimentResult, WriteOptions, error_chain, execute_to, write_file_atomically};
 use crate::SimError;
 use crate::experiment::{DynExperiment, Environment, Job};
-use crate::output::{md_table, read_summary_json, write_text};
+use crate::output::{md_table, read_summary_json};
 
 /// Options of [`run_paper`] (the `cargo xtask paper` flags).
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -29,6 +29,9 @@ pub struct PaperOptions {
     pub workspace_root: PathBuf,
     /// Output root, normally `<workspace_root>/target/paper`.
     pub out_root: PathBuf,
+    /// Write an experiment's folder even when it holds files fathom did not write
+    /// (they are kept; only fathom's own files are replaced).
+    pub force: bool,
 }
 
 /// The outcome of [`run_paper`].
@@ -110,7 +113,7 @@ pub fn run_paper_to(
 
     let report_path = options.out_root.join("REPORT.md");
     let report = collected_report(options, registry, &results, &failures);
-    write_text(&report_path, &report)?;
+    write_file_atomically(&report_path, &report)?;
     say(out, &format!("report: {}\n", report_path.display()))?;
 
     if let Some((_, first)) = failures.into_iter().next() {
@@ -165,10 +168,17 @@ fn run_one(options: &PaperOptions, exp: &dyn DynExperiment) -> Result<Experiment
         threads: options.threads,
         progress: None,
         env: Environment {
-            base_dir: options.workspace_root.clone(),
+            // A checkout without a data set skips that experiment, with a note.
+            skip_missing_data: true,
+            ..Environment::new(options.workspace_root.clone())
         },
     };
-    execute_into(exp, &job, &options.out_root.join(exp.name()))
+    let write = WriteOptions {
+        force: options.force,
+        command: "paper".into(),
+        scenario_files: false,
+    };
+    execute_to(exp, &job, &options.out_root.join(exp.name()), &write).map(|(r, _)| r)
 }
 
 fn dir_of(options: &PaperOptions, name: &str) -> PathBuf {

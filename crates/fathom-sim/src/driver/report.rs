@@ -2,15 +2,14 @@
 //! analysis: the per-experiment `report.md`, the console section, and the collected
 //! `REPORT.md` of `cargo xtask paper`.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use super::ExperimentResult;
+use super::{ExperimentResult, Setup};
 use crate::experiment::Analysis;
-use crate::output::{
-    Summary, claims_md_table, fmt_ci, fmt_num, fmt_opt, holds_word, summary_md_table, text_table,
-};
+use crate::output::{Claim, Row, Summary, md_table, text_table};
 
-/// Decimals used for numbers in the printed and Markdown tables.
+/// Significant digits of the numbers in the printed and Markdown tables.
 pub const TABLE_DECIMALS: usize = 4;
 
 fn file_name(p: &Path) -> String {
@@ -19,27 +18,165 @@ fn file_name(p: &Path) -> String {
         .unwrap_or_default()
 }
 
+/// How the numbers of one row are written: the same style for the value, the paper
+/// number and both ends of the interval, so they line up.
+#[derive(Debug, Clone, Copy)]
+enum Style {
+    /// Fixed decimals.
+    Fixed(usize),
+    /// Scientific with 3 decimals (very large or very small magnitudes).
+    Scientific,
+}
+
+impl Style {
+    /// [`TABLE_DECIMALS`] significant digits of `x` in unit `unit`; counts are
+    /// integers (a count averaged over runs has one decimal).
+    fn of(x: f64, unit: &str) -> Style {
+        let whole = x == x.trunc();
+        match unit {
+            "count" | "count/run" if whole => return Style::Fixed(0),
+            "count" | "count/run" => return Style::Fixed(1),
+            _ => {}
+        }
+        let a = x.abs();
+        if !a.is_finite() || a == 0.0 {
+            return Style::Fixed(0);
+        }
+        if !(1e-3..1e6).contains(&a) {
+            return Style::Scientific;
+        }
+        let digits = TABLE_DECIMALS as i32 - 1 - a.log10().floor() as i32;
+        Style::Fixed(digits.clamp(0, 6) as usize)
+    }
+
+    fn fmt(self, x: f64) -> String {
+        if !x.is_finite() {
+            return format!("{x}");
+        }
+        match self {
+            Style::Fixed(d) => format!("{x:.d$}"),
+            Style::Scientific => format!("{x:.3e}"),
+        }
+    }
+}
+
+/// `x` written as in the tables: [`TABLE_DECIMALS`] significant digits, counts
+/// (`unit` `count`, `count/run`) as integers or with one decimal.
+pub fn fmt_value(x: f64, unit: &str) -> String {
+    Style::of(x, unit).fmt(x)
+}
+
+/// The cells of one row: method, metric, unit, paper, value, 95 % CI.
+fn row_cells(r: &Row, units: &BTreeMap<String, String>) -> Vec<String> {
+    let unit = units.get(&r.metric).map_or("", String::as_str);
+    let style = Style::of(r.value, unit);
+    vec![
+        r.method.clone(),
+        r.metric.clone(),
+        if unit.is_empty() {
+            "-".into()
+        } else {
+            unit.into()
+        },
+        r.paper.map_or_else(|| "—".into(), |p| style.fmt(p)),
+        style.fmt(r.value),
+        r.ci95.map_or_else(
+            || "—".into(),
+            |[lo, hi]| format!("[{}, {}]", style.fmt(lo), style.fmt(hi)),
+        ),
+    ]
+}
+
+/// Column headers of the results table for `setup`.
+fn headers(setup: &Setup) -> [&'static str; 6] {
+    if setup.is_paper() {
+        ["method", "metric", "unit", "paper", "reproduced", "95% CI"]
+    } else {
+        [
+            "method",
+            "metric",
+            "unit",
+            "paper's setup",
+            "your scenario",
+            "95% CI",
+        ]
+    }
+}
+
+fn verdict(c: &Claim, setup: &Setup) -> &'static str {
+    match (c.holds, setup.is_paper()) {
+        (true, true) => "holds",
+        (false, true) => "does not hold",
+        (true, false) => "holds here",
+        (false, false) => "does not hold here",
+    }
+}
+
+/// The sentence that says which setup the numbers are for.
+fn setup_sentence(s: &Summary, setup: &Setup) -> String {
+    let preset = format!("`scenarios/{}.toml`", s.experiment);
+    if setup.is_paper() {
+        format!("Setup: the paper's setup ({preset}).")
+    } else {
+        format!(
+            "Setup: **your scenario**, which differs from the paper's setup ({preset}) in {}. \
+             The \"paper's setup\" column is the paper's number for its own setup, shown for \
+             reference only: a difference from it is expected and is not a failed \
+             reproduction.",
+            setup.keys_text(usize::MAX)
+        )
+    }
+}
+
 /// The per-experiment `report.md`.
 pub(crate) fn experiment_report(
     s: &Summary,
     scenario_label: &str,
     analysis: &Analysis,
+    setup: &Setup,
     figures: &[PathBuf],
 ) -> String {
     let mut md = format!(
         "# {}\n\nSeed paper: `{}` · Monte Carlo runs: {} · base seed: {} · scenario: `{}`\n\n",
         s.experiment, s.seed_doc, s.runs, s.base_seed, scenario_label,
     );
+    md.push_str(&setup_sentence(s, setup));
+    md.push_str("\n\n");
     if let Some(reason) = &analysis.skipped {
         md.push_str(&format!("**Skipped:** {reason}\n\n"));
     }
-    md.push_str("## Paper versus reproduced\n\n");
-    md.push_str(&summary_md_table(s, TABLE_DECIMALS));
-    md.push_str("\n## Claims\n\n");
+    md.push_str(if setup.is_paper() {
+        "## Paper versus reproduced\n\n"
+    } else {
+        "## Your scenario\n\n"
+    });
+    let rows: Vec<Vec<String>> = s
+        .rows
+        .iter()
+        .map(|r| row_cells(r, &analysis.units))
+        .collect();
+    md.push_str(&md_table(&headers(setup), &rows));
+    md.push_str(if setup.is_paper() {
+        "\n## Claims\n\n"
+    } else {
+        "\n## The paper's claims on your scenario\n\nThe paper's claims are about its own \
+         setup; here they are evaluated on your scenario's numbers.\n\n"
+    });
     if s.claims.is_empty() {
         md.push_str("(no claims evaluated)\n");
     } else {
-        md.push_str(&claims_md_table(s));
+        let rows: Vec<Vec<String>> = s
+            .claims
+            .iter()
+            .map(|c| {
+                vec![
+                    format!("`{}`: {}", c.id, c.text),
+                    verdict(c, setup).to_string(),
+                    c.detail.clone(),
+                ]
+            })
+            .collect();
+        md.push_str(&md_table(&["claim", "verdict", "detail"], &rows));
     }
     let section = analysis.report.trim();
     if !section.is_empty() {
@@ -58,8 +195,20 @@ pub(crate) fn experiment_report(
     md
 }
 
-/// The console section of one experiment: run count, seed, time, the table of rows
-/// and the claims.
+/// Every row of `r` as a console table (method, metric, unit, paper, value, 95 % CI),
+/// headed for its setup.
+pub fn console_rows(r: &ExperimentResult) -> String {
+    let rows: Vec<Vec<String>> = r
+        .summary
+        .rows
+        .iter()
+        .map(|row| row_cells(row, &r.units))
+        .collect();
+    text_table(&headers(&r.setup), &rows)
+}
+
+/// The console section of one experiment: run count, seed, time, the setup, every
+/// row with its unit and interval, and the claims.
 pub fn console_section(r: &ExperimentResult) -> String {
     let s = &r.summary;
     let mut t = format!(
@@ -68,39 +217,48 @@ pub fn console_section(r: &ExperimentResult) -> String {
         s.base_seed,
         r.elapsed.as_secs_f64()
     );
+    t.push_str(&console_setup(r));
     if let Some(reason) = &r.skipped {
         t.push_str(&format!("skipped: {reason}\n"));
     }
-    let rows: Vec<Vec<String>> = s
-        .rows
-        .iter()
-        .map(|row| {
-            vec![
-                row.method.clone(),
-                row.metric.clone(),
-                fmt_opt(row.paper, TABLE_DECIMALS),
-                fmt_num(row.value, TABLE_DECIMALS),
-                fmt_ci(row.ci95, TABLE_DECIMALS),
-            ]
-        })
-        .collect();
-    t.push_str(&text_table(
-        &["method", "metric", "paper", "reproduced", "95% CI"],
-        &rows,
-    ));
-    if !s.claims.is_empty() {
-        t.push_str("claims:\n");
-        for c in &s.claims {
+    t.push_str(&console_rows(r));
+    t.push_str(&console_claims(r));
+    t.push('\n');
+    t
+}
+
+/// One line: the paper's setup, or the keys in which the scenario differs from it.
+pub fn console_setup(r: &ExperimentResult) -> String {
+    if r.setup.is_paper() {
+        "setup: the paper's (paper | reproduced)\n".into()
+    } else {
+        format!(
+            "setup: your scenario, differs from the paper's in {} (the paper column is the \
+             paper's setup, for reference)\n",
+            r.setup.keys_text(6)
+        )
+    }
+}
+
+/// The claims, one line each, with their verdict for the setup.
+pub fn console_claims(r: &ExperimentResult) -> String {
+    let mut t = String::new();
+    if !r.summary.claims.is_empty() {
+        t.push_str(if r.setup.is_paper() {
+            "claims:\n"
+        } else {
+            "the paper's claims on your scenario:\n"
+        });
+        for c in &r.summary.claims {
             t.push_str(&format!(
                 "  [{}] {}: {} ({})\n",
-                holds_word(c.holds),
+                verdict(c, &r.setup),
                 c.id,
                 c.text,
                 c.detail
             ));
         }
     }
-    t.push('\n');
     t
 }
 
@@ -145,6 +303,24 @@ pub(crate) fn rebase_links(md: &str, prefix: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn numbers_have_four_significant_digits_and_counts_are_integers() {
+        assert_eq!(fmt_value(2551.257, "m"), "2551");
+        assert_eq!(fmt_value(0.075557, "m"), "0.07556");
+        assert_eq!(fmt_value(9.69e-5, "m²"), "9.690e-5");
+        assert_eq!(fmt_value(1.5e7, "m"), "1.500e7");
+        assert_eq!(fmt_value(123.0, "count"), "123");
+        assert_eq!(fmt_value(123.3333, "count/run"), "123.3");
+        assert_eq!(fmt_value(0.0, "m"), "0");
+        // The interval is written with the value's decimals.
+        let row = Row::new("A", "mean", 0.0756).with_ci95(0.07, 0.081);
+        let units = BTreeMap::from([("mean".to_string(), "m".to_string())]);
+        assert_eq!(
+            row_cells(&row, &units),
+            ["A", "mean", "m", "—", "0.07560", "[0.07000, 0.08100]"]
+        );
+    }
 
     #[test]
     fn markdown_rewriting() {

@@ -43,9 +43,7 @@ impl SingleRun {
         let label = exp.default_scenario();
         let path = workspace_root.join(label);
         let text = std::fs::read_to_string(&path).map_err(|e| SimError::io("read", &path, e))?;
-        let env = Environment {
-            base_dir: workspace_root.to_path_buf(),
-        };
+        let env = Environment::new(workspace_root);
         Ok(Self {
             name: exp.name(),
             run: exp.single_run(&text, label, &env)?,

@@ -48,7 +48,7 @@ impl<const K: u8> Experiment for Dummy<K> {
         1 => "scenarios/missing.toml",
         _ => "scenarios/dummy.toml",
     };
-    const PRESET: &'static str = "";
+    const PRESET: &'static str = "experiment = \"dummy\"\nruns = 10\nbase_seed = 5\n";
     const ABOUT: &'static str = "a test experiment";
 
     fn check(&self, s: &DummyScenario, file: &str) -> Result<DummyScenario, SimError> {
@@ -143,6 +143,7 @@ fn opts(tag: &str, only: Option<&str>) -> PaperOptions {
         threads: Some(2),
         out_root: root.join("target/paper"),
         workspace_root: root,
+        force: false,
     }
 }
 
@@ -153,9 +154,15 @@ fn read(p: &Path) -> String {
 #[test]
 fn runs_dummy_and_writes_all_outputs() {
     let o = opts("ok", Some("dummy"));
-    // A stale file from an earlier run is removed.
+    // A stale file of an earlier run (listed in its run_info.json) is removed.
     std::fs::create_dir_all(o.out_root.join("dummy")).unwrap();
     std::fs::write(o.out_root.join("dummy/old.svg"), "<svg/>").unwrap();
+    std::fs::write(
+        o.out_root.join("dummy/run_info.json"),
+        r#"{"fathom_version": "0", "experiment": "dummy", "scenario": "s", "runs": null,
+            "threads": null, "files": ["old.svg"]}"#,
+    )
+    .unwrap();
     let mut buf = Vec::new();
     let res = run_paper_to(&o, &reg(), &mut buf).unwrap();
     let printed = String::from_utf8(buf).unwrap();
@@ -171,7 +178,7 @@ fn runs_dummy_and_writes_all_outputs() {
     assert_eq!(back, r.summary);
     let rep = read(&o.out_root.join("dummy/report.md"));
     assert!(
-        rep.contains("| method | metric | paper | reproduced | 95% CI |"),
+        rep.contains("| method | metric | unit | paper | reproduced | 95% CI |"),
         "{rep}"
     );
     assert!(rep.contains("- [draws.svg](draws.svg)"), "{rep}");
@@ -278,9 +285,7 @@ fn seed_override_reaches_every_run_and_the_summary() {
         seed,
         threads: Some(2),
         progress: None,
-        env: Environment {
-            base_dir: o.workspace_root.clone(),
-        },
+        env: Environment::new(o.workspace_root.clone()),
     };
     let exp: &dyn DynExperiment = &Dummy::<0>;
     let a = exp.execute(&job(None)).unwrap();

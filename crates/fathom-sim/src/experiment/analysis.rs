@@ -76,6 +76,7 @@ pub struct Analysis {
     pub(crate) report: String,
     pub(crate) files: Vec<OutputFile>,
     pub(crate) skipped: Option<String>,
+    pub(crate) units: std::collections::BTreeMap<String, String>,
 }
 
 impl Analysis {
@@ -92,6 +93,19 @@ impl Analysis {
     /// Appends a claim.
     pub fn claim(&mut self, claim: Claim) {
         self.claims.push(claim);
+    }
+
+    /// Declares the unit of every row with metric `metric` (`"m"`, `"m/s"`, `"%"`,
+    /// `"m²"`; `"count"` for counts, `"count/run"` for a count averaged over runs,
+    /// `"1"` for ratios and fractions). The console and `report.md` tables show it;
+    /// `summary.json` does not carry it (its rows keep the contract's shape).
+    pub fn unit(&mut self, metric: impl Into<String>, unit: impl Into<String>) {
+        self.units.insert(metric.into(), unit.into());
+    }
+
+    /// The declared unit of `metric`, if any.
+    pub fn unit_of(&self, metric: &str) -> Option<&str> {
+        self.units.get(metric).map(String::as_str)
     }
 
     /// Adds an extra `summary.json` key.

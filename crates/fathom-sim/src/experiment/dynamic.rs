@@ -5,10 +5,11 @@ use rand_chacha::ChaCha8Rng;
 
 use super::{Analysis, Batch, Environment, Experiment, ScenarioFile};
 use crate::SimError;
+use crate::cost::Cost;
 use crate::montecarlo::try_run_indices;
 use crate::output::Summary;
 use crate::progress::{Progress, ProgressEvent};
-use crate::scenario::{parse_toml, require_experiment, to_toml};
+use crate::scenario::{check_magnitudes, parse_toml, require_experiment, to_toml};
 
 /// What the driver asks of one execution of an experiment.
 #[derive(Debug, Clone)]
@@ -150,6 +151,30 @@ pub trait DynExperiment: Send + Sync {
         seed: Option<u64>,
     ) -> Result<Resolved, SimError>;
 
+    /// Parses `text`, applies the overrides, checks it and estimates its cost on
+    /// `threads` worker threads (`None`: all cores); the cost is not checked against
+    /// any limit here.
+    ///
+    /// # Errors
+    /// As [`DynExperiment::resolve`].
+    fn cost(
+        &self,
+        text: &str,
+        file: &str,
+        runs: Option<usize>,
+        seed: Option<u64>,
+        threads: Option<usize>,
+    ) -> Result<Cost, SimError>;
+
+    /// What [`DynExperiment::execute`] checks before it prepares anything: the
+    /// scenario with the job's overrides, its cost against `job.env.limits`, the
+    /// job's options. `fathom run` calls it before it claims the output folder.
+    ///
+    /// # Errors
+    /// As [`DynExperiment::resolve`]; a cost beyond the limits ([`SimError::Invalid`]
+    /// naming the key); bad `--threads` / `--runs`.
+    fn assess(&self, job: &Job<'_>) -> Result<(Resolved, Cost), SimError>;
+
     /// Runs the whole pipeline and returns the summary and the analysis.
     ///
     /// # Errors
@@ -208,10 +233,13 @@ fn parse_with_overrides<E: Experiment>(
 ) -> Result<(E::Scenario, E::Checked, Resolved), SimError> {
     let mut scenario: E::Scenario = parse_toml(text, file)?;
     require_experiment(file, scenario.experiment(), E::NAME)?;
+    check_magnitudes(text, file)?;
     if let Some(n) = runs {
         if n == 0 {
             return Err(SimError::invalid_argument("--runs", "must be at least 1"));
         }
+        // A deterministic experiment has no run count to replace (`cargo xtask paper
+        // --runs N` applies to every experiment).
         scenario.set_runs(n);
     }
     if let Some(s) = seed {
@@ -227,7 +255,26 @@ fn parse_with_overrides<E: Experiment>(
         }
         scenario.set_base_seed(s);
     }
-    let checked = exp.check(&scenario, file)?;
+    if let Some(s) = scenario.base_seed()
+        && i64::try_from(s).is_err()
+    {
+        let reason = format!(
+            "must be at most {} (2^63 - 1, the largest TOML integer, so that the resolved \
+             scenario can record it), got {s}",
+            i64::MAX
+        );
+        return Err(match seed {
+            Some(_) => SimError::invalid_argument("--seed", reason),
+            None => SimError::invalid(file, "base_seed", reason),
+        });
+    }
+    let checked = exp.check(&scenario, file).map_err(|e| match e {
+        // A run count the user gave with --runs is reported as the option's.
+        SimError::Invalid {
+            key_path, reason, ..
+        } if runs.is_some() && key_path == "runs" => SimError::invalid_argument("--runs", reason),
+        other => other,
+    })?;
     let resolved = Resolved {
         toml: to_toml(&scenario, file)?,
         runs: scenario.runs(),
@@ -236,19 +283,42 @@ fn parse_with_overrides<E: Experiment>(
     Ok((scenario, checked, resolved))
 }
 
-/// Parse, override, check and prepare; the batches of the prepared experiment.
-fn plan<E: Experiment>(
-    exp: &E,
-    job: &Job<'_>,
-) -> Result<(Resolved, E::Prepared, Vec<Batch>), SimError> {
+/// The cost of a checked scenario on `threads` worker threads (`None`: all cores).
+fn cost_of<E: Experiment>(exp: &E, scenario: &E::Scenario, threads: Option<usize>) -> Cost {
+    let threads = threads.unwrap_or_else(|| {
+        std::thread::available_parallelism().map_or(1, std::num::NonZeroUsize::get)
+    });
+    Cost::new(exp.cost(scenario), threads)
+}
+
+/// Parse, override, check, estimate the cost against the limits; what `fathom run`
+/// checks before it touches the output folder.
+fn assess<E: Experiment>(exp: &E, job: &Job<'_>) -> Result<(E::Checked, Resolved, Cost), SimError> {
     if job.threads == Some(0) {
         return Err(SimError::invalid_argument(
             "--threads",
             "must be at least 1",
         ));
     }
-    let (_, checked, resolved) = parse_with_overrides(exp, job.text, job.file, job.runs, job.seed)?;
-    let prepared = exp.prepare(checked, &job.env)?;
+    let (scenario, checked, resolved) =
+        parse_with_overrides(exp, job.text, job.file, job.runs, job.seed)?;
+    let cost = cost_of(exp, &scenario, job.threads);
+    cost.check(&job.env.limits, job.file)?;
+    Ok((checked, resolved, cost))
+}
+
+/// Parse, override, check, cost and prepare; the batches of the prepared experiment.
+/// Preparation errors (a data folder, the scenario's values in a model's checks) are
+/// the user's input ([`SimError::Input`]).
+fn plan<E: Experiment>(
+    exp: &E,
+    job: &Job<'_>,
+) -> Result<(Resolved, E::Prepared, Vec<Batch>), SimError> {
+    let (checked, resolved, _) = assess(exp, job)?;
+    let prepared = exp.prepare(checked, &job.env).map_err(|e| match e {
+        e if e.is_user_error() => e,
+        e => SimError::Input(Box::new(e)),
+    })?;
     let batches = exp.batches(&prepared);
     Ok((resolved, prepared, batches))
 }
@@ -360,6 +430,22 @@ impl<E: Experiment> DynExperiment for E {
         seed: Option<u64>,
     ) -> Result<Resolved, SimError> {
         parse_with_overrides(self, text, file, runs, seed).map(|(_, _, r)| r)
+    }
+
+    fn cost(
+        &self,
+        text: &str,
+        file: &str,
+        runs: Option<usize>,
+        seed: Option<u64>,
+        threads: Option<usize>,
+    ) -> Result<Cost, SimError> {
+        let (scenario, _, _) = parse_with_overrides(self, text, file, runs, seed)?;
+        Ok(cost_of(self, &scenario, threads))
+    }
+
+    fn assess(&self, job: &Job<'_>) -> Result<(Resolved, Cost), SimError> {
+        assess(self, job).map(|(_, r, c)| (r, c))
     }
 
     fn execute(&self, job: &Job<'_>) -> Result<Executed, SimError> {

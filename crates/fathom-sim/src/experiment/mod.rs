@@ -6,7 +6,8 @@
 //! 1. a scenario type ([`ScenarioFile`]: a serde struct with `deny_unknown_fields`
 //!    and the common header keys `experiment`, `runs`, `base_seed`);
 //! 2. [`Experiment::check`]: the scenario -> checked parameters (fast, no I/O; what
-//!    `fathom check` runs);
+//!    `fathom check` runs), then [`Experiment::cost`]: samples, memory and time of the
+//!    scenario, checked against the [`Limits`] before anything is allocated;
 //! 3. [`Experiment::prepare`]: what every run shares and is costly to build (the
 //!    truth, a data set read from disk);
 //! 4. [`Experiment::batches`] and [`Experiment::run`]: the Monte Carlo batches and one
@@ -41,6 +42,7 @@ use serde::Serialize;
 use serde::de::DeserializeOwned;
 
 use crate::SimError;
+use crate::cost::{CostTerm, Limits};
 
 pub use analysis::{Analysis, FileContent, OutputFile};
 pub use dynamic::{
@@ -109,13 +111,31 @@ impl Batch {
     }
 }
 
-/// Where an experiment's preparation finds what lives outside the scenario file.
-#[derive(Debug, Clone, PartialEq, Eq)]
+/// What an execution takes from outside the scenario file: where data folders are,
+/// what to do when one is missing, and the limits a scenario must fit.
+#[derive(Debug, Clone, PartialEq)]
 pub struct Environment {
     /// Relative data folders of a scenario are looked up here and beside each of its
     /// ancestors (the workspace root for `cargo xtask paper`, the current directory
     /// for `fathom run`).
     pub base_dir: PathBuf,
+    /// A data folder that is not found skips the experiment (with a note in its
+    /// report) instead of being an error: `cargo xtask paper` on a checkout without
+    /// the data. `fathom run` refuses a missing folder.
+    pub skip_missing_data: bool,
+    /// The limits the scenario's estimated cost must fit ([`crate::cost`]).
+    pub limits: Limits,
+}
+
+impl Environment {
+    /// Data looked up from `base_dir`, a missing data folder an error, default limits.
+    pub fn new(base_dir: impl Into<PathBuf>) -> Self {
+        Environment {
+            base_dir: base_dir.into(),
+            skip_missing_data: false,
+            limits: Limits::default(),
+        }
+    }
 }
 
 /// A paper experiment (see the module docs for the division of work).
@@ -156,6 +176,16 @@ pub trait Experiment: Clone + Send + Sync + 'static {
     /// # Errors
     /// [`SimError::Invalid`] naming the key.
     fn check(&self, scenario: &Self::Scenario, file: &str) -> Result<Self::Checked, SimError>;
+
+    /// The cost of the checked `scenario` ([`crate::cost`]): its samples, memory and
+    /// time, each part with the keys that drive it. Computed from the scenario values
+    /// alone (no allocation that grows with them), before anything is prepared. The
+    /// default gives no estimate; every registered experiment overrides it (a test
+    /// checks that).
+    fn cost(&self, scenario: &Self::Scenario) -> Vec<CostTerm> {
+        let _ = scenario;
+        Vec::new()
+    }
 
     /// Builds what the runs share.
     ///

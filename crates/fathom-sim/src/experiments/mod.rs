@@ -3,6 +3,8 @@
 
 pub mod beacons;
 pub mod common;
+#[cfg(test)]
+mod cost_tests;
 pub mod fusion;
 pub mod noise;
 pub mod plaza;

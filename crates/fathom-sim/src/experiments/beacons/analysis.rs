@@ -110,6 +110,12 @@ fn paper_of(scheme: UpdateScheme) -> (Option<[f64; 4]>, Option<f64>) {
 /// Pushes the rows of one scheme's aggregated statistics under method name `m`.
 fn push_rows(out: &mut Analysis, m: &str, t: &SchemeTable, paper: (Option<[f64; 4]>, Option<f64>)) {
     let [mean, std, max, rmse, recall, fr] = &t.stats;
+    // 3D position error, m; recall a fraction; false rejections per run.
+    for metric in ["mean", "std", "max", "rmse"] {
+        out.unit(metric, "m");
+    }
+    out.unit("outlier_recall", "1");
+    out.unit("false_rejections", "count/run");
     for (k, (metric, a)) in [("mean", mean), ("std", std), ("max", max), ("rmse", rmse)]
         .iter()
         .enumerate()

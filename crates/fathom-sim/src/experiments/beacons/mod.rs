@@ -23,6 +23,7 @@
 //! `report`, `paper` (the printed tables, reference only).
 
 mod analysis;
+mod cost;
 mod figures;
 pub mod filter;
 mod paper;
@@ -37,6 +38,7 @@ pub use self::filter::{EkfSettings, FilterSetup, SchemeRun, events, run_scheme};
 pub use self::run::{BatchSums, KeptStats, SchemeStats};
 use self::scenario::{BeaconsScenario, Checked};
 use crate::SimError;
+use crate::cost::CostTerm;
 use crate::experiment::{Analysis, Batch, Environment, Experiment};
 
 /// The main case (Table 13).
@@ -69,6 +71,10 @@ impl Experiment for Beacons {
 
     fn check(&self, scenario: &BeaconsScenario, file: &str) -> Result<Checked, SimError> {
         scenario.check(file)
+    }
+
+    fn cost(&self, scenario: &BeaconsScenario) -> Vec<CostTerm> {
+        cost::terms(scenario)
     }
 
     fn prepare(&self, checked: Checked, _env: &Environment) -> Result<Checked, SimError> {

@@ -189,6 +189,17 @@ pub(super) fn analyse(
     let other = std::mem::take(&mut records[super::OTHER]);
     let results = std::mem::take(&mut records[0]);
     let primary = setup.run.tuning.reading;
+    for (metric, unit) in [
+        ("mean_3d", "m"),
+        ("std_3d", "m"),
+        ("mean_2d", "m"),
+        ("std_2d", "m"),
+        ("turn_ratio_3d", "1"),
+        ("ins_integrator_mean_err", "m"),
+        ("ins_integrator_max_err", "m"),
+    ] {
+        out.unit(metric, unit);
+    }
     // Run 0 again, keeping the paths for the figures (same stream: same numbers).
     let run0 = run_once(
         setup,

@@ -10,6 +10,7 @@
 //! run sees the same sensor noise (see [`sim`]).
 
 mod analysis;
+mod cost;
 mod figures;
 mod report;
 pub mod scenario;
@@ -24,6 +25,7 @@ use self::analysis::{SWEEP_METHODS, SWEEPS};
 use self::scenario::{FusionScenario, FusionSetup};
 use self::sim::{Method, RunConfig};
 use crate::SimError;
+use crate::cost::CostTerm;
 use crate::experiment::{Analysis, Batch, Environment, Experiment};
 
 /// One value of a sensitivity sweep and the run configuration it gives.
@@ -74,6 +76,10 @@ impl Experiment for Fusion {
 
     fn check(&self, scenario: &FusionScenario, file: &str) -> Result<FusionSetup, SimError> {
         scenario.check(file)
+    }
+
+    fn cost(&self, scenario: &FusionScenario) -> Vec<CostTerm> {
+        cost::terms(scenario)
     }
 
     fn prepare(&self, setup: FusionSetup, _env: &Environment) -> Result<Prepared, SimError> {

@@ -103,6 +103,8 @@ pub(super) fn analyse(
                 mean_cov[(i, j)] = st.mean;
                 let d = design[(i, j)];
                 let p = paper.map(|m| m[i][j]);
+                // Four ranges and the depth, all in m: covariances in m².
+                out.unit(format!("cov_{}{}", i + 1, j + 1), "m²");
                 out.row(
                     Row::new(&case.name, format!("cov_{}{}", i + 1, j + 1), st.mean)
                         .with_paper(p)
@@ -162,6 +164,7 @@ pub(super) fn analyse(
         });
 
         let long = long_run(checked, case, &design, checked.period)?;
+        out.unit("long_run_max_rel_dev", "1");
         out.row(Row::new(
             &case.name,
             "long_run_max_rel_dev",

@@ -20,6 +20,7 @@
 //! (the printed matrices, reference only).
 
 mod analysis;
+mod cost;
 mod figures;
 mod paper;
 mod report;
@@ -31,6 +32,7 @@ use rand_chacha::ChaCha8Rng;
 
 use self::scenario::{Checked, NoiseScenario};
 use crate::SimError;
+use crate::cost::CostTerm;
 use crate::experiment::{Analysis, Batch, Environment, Experiment};
 
 /// Labels of the five noise components, in matrix order.
@@ -58,6 +60,10 @@ impl Experiment for Noise {
 
     fn check(&self, scenario: &NoiseScenario, file: &str) -> Result<Checked, SimError> {
         scenario.check(file)
+    }
+
+    fn cost(&self, scenario: &NoiseScenario) -> Vec<CostTerm> {
+        cost::terms(scenario)
     }
 
     fn prepare(&self, checked: Checked, _env: &Environment) -> Result<Checked, SimError> {

@@ -27,6 +27,21 @@ pub fn smoothed_name(method: &str) -> String {
 /// The `summary.json` rows (per method `mean`, `std`, `max`, `rmse` of the 2D position
 /// error and `rejected`; the range analysis) and the claims.
 pub(super) fn rows_and_claims(r: &PlazaReplay, s: &mut Analysis) {
+    for (metric, unit) in [
+        ("mean", "m"),
+        ("std", "m"),
+        ("max", "m"),
+        ("rmse", "m"),
+        ("rejected", "count"),
+        ("error_mean", "m"),
+        ("error_std", "m"),
+        ("fit_offset", "m"),
+        ("fit_scale", "1"),
+        ("fit_residual_std", "m"),
+        ("fit_residual_kurtosis", "1"),
+    ] {
+        s.unit(metric, unit);
+    }
     for m in &r.methods {
         s.row(Row::new(&m.name, "mean", m.stats.mean));
         s.row(Row::new(&m.name, "std", m.stats.std));

@@ -6,13 +6,16 @@
 //! `scenarios/plaza.toml` (default `shared/data/plaza1`) is looked up inside the
 //! base directory (the workspace root; the current directory for `fathom run`) and
 //! beside each of its ancestors, so a checkout next to `shared/` finds
-//! `../shared/data/plaza1`. When it is absent the experiment is **skipped**: it has no
-//! batch to run, its summary has no rows (`runs = 0`) and the report says why.
+//! `../shared/data/plaza1`. When it is absent, `fathom run` refuses the scenario (a
+//! user error naming `data.dir`); `cargo xtask paper` (whose environment sets
+//! `skip_missing_data`) **skips** the experiment: it has no batch to run, its summary
+//! has no rows (`runs = 0`) and the report says why.
 //!
 //! Files: `analysis` (rows and claims), `figures`, `report`; the replay itself lives in
 //! [`crate::replay::plaza`], shared with `fathom replay plaza`.
 
 mod analysis;
+mod cost;
 mod figures;
 mod report;
 
@@ -21,6 +24,7 @@ use std::path::{Path, PathBuf};
 use rand_chacha::ChaCha8Rng;
 
 use crate::SimError;
+use crate::cost::CostTerm;
 use crate::data::plaza::PlazaLog;
 use crate::experiment::{Analysis, Batch, Environment, Experiment, ScenarioFile};
 use crate::replay::plaza::{PlazaReplay, PlazaSettings, PlazaToml, replay};
@@ -73,8 +77,25 @@ impl Experiment for Plaza {
         scenario.check(file)
     }
 
+    fn cost(&self, scenario: &PlazaToml) -> Vec<CostTerm> {
+        cost::terms(scenario)
+    }
+
     fn prepare(&self, settings: PlazaSettings, env: &Environment) -> Result<Prepared, SimError> {
         let data = match find_data_dir(&env.base_dir, &settings.data_dir) {
+            None if !env.skip_missing_data => {
+                return Err(SimError::invalid_argument(
+                    "data folder",
+                    format!(
+                        "`{}` (key `data.dir`) is not found in `{}` or beside any of its \
+                         ancestors; put the data set's three files (`*_DR.txt`, `*_TD.txt`, \
+                         `*_.mat`) there, or run `fathom replay plaza <dir>` on the folder \
+                         holding them",
+                        settings.data_dir,
+                        env.base_dir.display()
+                    ),
+                ));
+            }
             None => Err(format!(
                 "data folder `{}` not found in `{}` or beside any of its ancestors. The Plaza \
                  data is not part of the repository; put the data set's three files \

@@ -135,6 +135,18 @@ pub(super) fn analyse(
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let (c, shared) = (&p.c, &p.shared);
+    for (metric, unit) in [
+        ("final_h", "m"),
+        ("rms_h", "m"),
+        ("rms_vel", "m/s"),
+        ("final_h_median", "m"),
+        ("runs_final_h_beyond_threshold", "count"),
+        ("growth_rate_invalid", "m/s"),
+        ("growth_rate_valid", "m/s"),
+        ("final_h_minus_default", "m"),
+    ] {
+        out.unit(metric, unit);
+    }
 
     let all: Vec<MethodMetrics> = (0..METHODS.len()).map(|m| metrics(runs, m)).collect();
     let mut table = Vec::new();
@@ -208,6 +220,8 @@ pub(super) fn analyse(
         }
         let (sf_m, sf_ci) = mean_and_ci95(&sf)?;
         let (b_m, b_ci) = mean_and_ci95(&b)?;
+        out.unit(format!("sf_error_pct_{}", i + 1), "%");
+        out.unit(format!("bias_error_{}", i + 1), "m/s");
         out.row(
             Row::new("VKF", format!("sf_error_pct_{}", i + 1), sf_m)
                 .with_paper(None)

@@ -13,6 +13,7 @@
 //! the RTS-smoothed VKF-aided filter and ESKF).
 
 mod analysis;
+mod cost;
 mod figures;
 mod report;
 pub(crate) mod scenario;
@@ -24,6 +25,7 @@ use rand_chacha::ChaCha8Rng;
 use self::scenario::{Checked, VkfScenario};
 use self::sim::{RunOutput, Shared};
 use crate::SimError;
+use crate::cost::CostTerm;
 use crate::experiment::{Analysis, Batch, Environment, Experiment};
 
 /// The checked scenario and the truth every run shares.
@@ -56,6 +58,10 @@ impl Experiment for Vkf {
 
     fn check(&self, scenario: &VkfScenario, file: &str) -> Result<Checked, SimError> {
         scenario.check(file)
+    }
+
+    fn cost(&self, scenario: &VkfScenario) -> Vec<CostTerm> {
+        cost::terms(scenario)
     }
 
     fn prepare(&self, c: Checked, _env: &Environment) -> Result<Prepared, SimError> {

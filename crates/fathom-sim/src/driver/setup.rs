@@ -1,0 +1,150 @@
+//! Is a scenario the paper's setup? The resolved scenario is compared key by key
+//! with the experiment's resolved preset (`scenarios/<experiment>.toml`, the setup
+//! under which the paper's numbers are compared). Keys that choose how much is
+//! computed or shown, not what is simulated, are left out: `experiment`, run counts
+//! (`runs`, `*_runs`), `base_seed`, the `[figures]` table and the data folder
+//! `data.dir` (the same data set can live anywhere).
+
+use crate::experiment::DynExperiment;
+
+/// How a scenario relates to its experiment's paper setup.
+#[derive(Debug, Clone, PartialEq, Eq, Default)]
+pub enum Setup {
+    /// The paper's setup (the preset, up to run counts, seeds and figure settings).
+    #[default]
+    Paper,
+    /// A user's variant: the keys (dotted paths) whose values differ from the preset.
+    Variant(Vec<String>),
+}
+
+impl Setup {
+    /// Compares the resolved scenario `resolved_toml` of `exp` with its preset.
+    pub fn of(exp: &dyn DynExperiment, resolved_toml: &str) -> Setup {
+        let preset = exp
+            .resolve(exp.preset(), "preset", None, None)
+            .ok()
+            .and_then(|r| r.toml.parse::<toml::Table>().ok());
+        let mine = resolved_toml.parse::<toml::Table>().ok();
+        let (Some(preset), Some(mine)) = (preset, mine) else {
+            // An experiment without a usable preset has no paper setup to compare with.
+            return Setup::Variant(vec!["(no preset to compare with)".into()]);
+        };
+        let mut differs = Vec::new();
+        diff_tables(&preset, &mine, "", &mut differs);
+        if differs.is_empty() {
+            Setup::Paper
+        } else {
+            Setup::Variant(differs)
+        }
+    }
+
+    /// Whether this is the paper's setup.
+    pub fn is_paper(&self) -> bool {
+        matches!(self, Setup::Paper)
+    }
+
+    /// "`a.b`, `c`" (at most `max` keys, then "and N more").
+    pub fn keys_text(&self, max: usize) -> String {
+        let Setup::Variant(keys) = self else {
+            return String::new();
+        };
+        let mut shown: Vec<String> = keys.iter().take(max).map(|k| format!("`{k}`")).collect();
+        if keys.len() > max {
+            shown.push(format!("{} more", keys.len() - max));
+        }
+        shown.join(", ")
+    }
+}
+
+/// Keys left out of the comparison.
+fn ignored(path: &str, key: &str) -> bool {
+    matches!(path, "experiment" | "base_seed" | "data.dir")
+        || key == "runs"
+        || key.ends_with("_runs")
+        || path == "figures"
+        || path.starts_with("figures.")
+}
+
+fn diff_tables(a: &toml::Table, b: &toml::Table, prefix: &str, out: &mut Vec<String>) {
+    let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
+    keys.sort();
+    keys.dedup();
+    for k in keys {
+        let path = if prefix.is_empty() {
+            k.clone()
+        } else {
+            format!("{prefix}.{k}")
+        };
+        if ignored(&path, k) {
+            continue;
+        }
+        match (a.get(k), b.get(k)) {
+            (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
+                diff_tables(x, y, &path, out);
+            }
+            (Some(toml::Value::Array(x)), Some(toml::Value::Array(y)))
+                if x.len() == y.len()
+                    && x.iter().chain(y).all(toml::Value::is_table)
+                    && !x.is_empty() =>
+            {
+                for (i, (p, q)) in x.iter().zip(y).enumerate() {
+                    if let (toml::Value::Table(p), toml::Value::Table(q)) = (p, q) {
+                        diff_tables(p, q, &format!("{path}[{i}]"), out);
+                    }
+                }
+            }
+            (x, y) if x != y => out.push(path),
+            _ => {}
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::experiments::registry;
+
+    #[test]
+    fn presets_are_the_paper_setup_up_to_runs_and_seeds() {
+        for exp in registry() {
+            let r = exp.resolve(exp.preset(), "p", None, None).unwrap();
+            assert_eq!(Setup::of(exp, &r.toml), Setup::Paper, "{}", exp.name());
+            if r.base_seed.is_some() {
+                let r = exp.resolve(exp.preset(), "p", Some(3), Some(99)).unwrap();
+                assert_eq!(Setup::of(exp, &r.toml), Setup::Paper, "{}", exp.name());
+            }
+        }
+    }
+
+    #[test]
+    fn a_variant_names_exactly_the_keys_it_changes() {
+        let reg = registry();
+        let beacons = reg.iter().find(|e| e.name() == "beacons").unwrap();
+        let text = beacons
+            .preset()
+            .replace("outlier_count = 276", "outlier_count = 200")
+            .replacen("[15.0, 15.0, 0.0], [-15.0", "[15.0, 15.0, 0.0], [-16.0", 1);
+        let r = beacons.resolve(&text, "v", None, None).unwrap();
+        let setup = Setup::of(*beacons, &r.toml);
+        assert_eq!(
+            setup,
+            Setup::Variant(vec![
+                "beacons.positions".into(),
+                "noise.outlier_count".into()
+            ])
+        );
+        assert_eq!(setup.keys_text(1), "`beacons.positions`, 1 more");
+        // A case's value is named with its index.
+        let text = beacons
+            .preset()
+            .replacen("corr_sigma_m = 0.2", "corr_sigma_m = 0.3", 1);
+        let r = beacons.resolve(&text, "v", None, None).unwrap();
+        match Setup::of(*beacons, &r.toml) {
+            Setup::Variant(keys) => {
+                assert_eq!(keys.len(), 1, "{keys:?}");
+                assert!(keys[0].starts_with("cases[") && keys[0].ends_with("].corr_sigma_m"));
+            }
+            Setup::Paper => panic!("not detected"),
+        }
+    }
+}
