@@ -161,7 +161,7 @@ fn example_logs_replay_with_and_without_truth() {
     usage_error(
         &root,
         &["replay", "ins-dvl", "rb"],
-        &["log.toml", "not a `ins-dvl` log"],
+        &["log.toml", "not an `ins-dvl` log"],
     );
 }
 

@@ -391,8 +391,9 @@ impl BeaconsScenario {
                 TimingKind::Sync => t.sync_period_s,
                 TimingKind::Async => t.range_period_s,
             };
-            let range_samples =
-                beacons.len() * (self.motion.duration_s / range_period).floor() as usize;
+            let range_samples = beacons
+                .len()
+                .saturating_mul((self.motion.duration_s / range_period).floor() as usize);
             if n.outlier_count > range_samples {
                 return Err(SimError::invalid(
                     file,

@@ -28,6 +28,7 @@ pub mod check;
 mod check_scene;
 pub mod claims;
 pub mod closed_loop;
+mod cost;
 mod figures;
 pub mod nav;
 mod paper;
@@ -46,6 +47,7 @@ use self::record::{BatchFold, KeptRun, RunRecord, fold_run};
 use self::scenario::UrbanScenario;
 use self::world::Prepared;
 use crate::SimError;
+use crate::cost::CostTerm;
 use crate::experiment::{Analysis, Batch, Environment, Experiment};
 
 /// The `urban` experiment.
@@ -68,6 +70,10 @@ impl Experiment for Urban {
 
     fn check(&self, scenario: &UrbanScenario, file: &str) -> Result<check::Checked, SimError> {
         scenario.check(file)
+    }
+
+    fn cost(&self, scenario: &UrbanScenario) -> Vec<CostTerm> {
+        cost::terms(scenario)
     }
 
     fn prepare(&self, checked: check::Checked, env: &Environment) -> Result<Prepared, SimError> {
