@@ -63,6 +63,8 @@
 //! that cannot be written after the run). Errors are printed on one line with their
 //! whole cause chain, naming the key or the option.
 
+mod campaign;
+mod own_logs;
 mod pils;
 
 use std::io::{IsTerminal, Write as _};
@@ -71,24 +73,20 @@ use std::process::ExitCode;
 use std::sync::Mutex;
 use std::time::Instant;
 
+use campaign::{CampaignKind, MergeArgs, campaign_cmd, merge_cmd, run_shard_cmd};
+use own_logs::{LogCmd, OwnArgs, log_cmd, replay_own};
+
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
 use fathom_sim::cost::Limits;
-use fathom_sim::data::layout::convert::range_beacon_from_plaza;
-use fathom_sim::data::layout::ins_dvl::InsDvlLog;
-use fathom_sim::data::layout::range_beacon::RangeBeaconLog;
-use fathom_sim::data::layout::{FileSet, LogKind, Manifest, write_log};
-use fathom_sim::data::plaza::PlazaLog;
-use fathom_sim::driver::campaign::{merge, run_shard, slurm_script};
+use fathom_sim::data::layout::LogKind;
 use fathom_sim::driver::{console_claims, console_rows, console_setup};
-use fathom_sim::example_log::{ins_dvl_example, range_beacon_example};
 use fathom_sim::experiment::{Environment, Job, Shard};
 use fathom_sim::experiments::plaza::Plaza;
 use fathom_sim::progress::{Progress, ProgressEvent};
-use fathom_sim::replay::own_log::{OwnLogError, preset, replay_dir, write_outputs};
 use fathom_sim::replay::plaza::parse_settings;
 use fathom_sim::user_run::{
-    RunOptions, check_command, check_command_with, check_scenario_with, one_line, peek_experiment,
+    RunOptions, check_command_with, check_scenario_with, one_line, peek_experiment,
     run_scenario_text,
 };
 use fathom_sim::{Experiment, SimError, error_chain, experiments::registry};
@@ -128,44 +126,6 @@ enum Command {
     /// Processor-in-the-loop: the simulator and the navigation as two processes over
     /// UDP with MAVLink 2 (`fathom pils FILE`, or `fathom pils sim|nav|offline`).
     Pils(pils::PilsArgs),
-}
-
-#[derive(Debug, Args)]
-struct MergeArgs {
-    /// Shard folders (each with `manifest.json`), in any order.
-    #[arg(required = true)]
-    dirs: Vec<PathBuf>,
-    /// Output folder (replaced only once the merge is complete).
-    #[arg(long, value_name = "DIR")]
-    out: PathBuf,
-    /// Worker threads of the analysis (results do not depend on it).
-    #[arg(long, value_name = "T")]
-    threads: Option<usize>,
-    /// Write into a folder holding files fathom did not write (they are kept; only
-    /// fathom's own files are replaced).
-    #[arg(long)]
-    force: bool,
-}
-
-#[derive(Debug, Subcommand)]
-enum CampaignKind {
-    /// A Slurm job array of shards and a merge job that depends on it.
-    Slurm(SlurmArgs),
-}
-
-#[derive(Debug, Args)]
-struct SlurmArgs {
-    /// Scenario file.
-    scenario: PathBuf,
-    /// Monte Carlo runs of the campaign.
-    #[arg(long, value_name = "N")]
-    runs: usize,
-    /// Number of shards (array tasks).
-    #[arg(long, value_name = "M")]
-    shards: usize,
-    /// Campaign folder: the script, the shards' folders, logs and the merged outputs.
-    #[arg(long, value_name = "DIR", default_value = "campaign")]
-    dir: PathBuf,
 }
 
 /// The limits a scenario's estimated cost must fit.
@@ -252,79 +212,6 @@ enum ReplayData {
     RangeBeacon(OwnArgs),
     /// Your own INS / DVL log (fathom's CSV layout, docs/own-data.md).
     InsDvl(OwnArgs),
-}
-
-#[derive(Debug, Args)]
-struct OwnArgs {
-    /// The log folder (`log.toml` and the CSV files).
-    dir: PathBuf,
-    /// Settings and methods (TOML, the schema of `scenarios/range-beacon.toml` or
-    /// `scenarios/ins-dvl.toml`); default: built in.
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
-    /// Output folder (default `range-beacon-replay` / `ins-dvl-replay`).
-    #[arg(long, value_name = "DIR")]
-    out: Option<PathBuf>,
-}
-
-/// The two kinds of log.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-enum KindArg {
-    /// Range-beacon localization.
-    RangeBeacon,
-    /// INS / DVL navigation.
-    InsDvl,
-}
-
-impl KindArg {
-    fn kind(self) -> LogKind {
-        match self {
-            KindArg::RangeBeacon => LogKind::RangeBeacon,
-            KindArg::InsDvl => LogKind::InsDvl,
-        }
-    }
-}
-
-#[derive(Debug, Subcommand)]
-enum LogCmd {
-    /// Write a simulated example log (to see a valid log, or to try `fathom replay`).
-    Example(ExampleArgs),
-    /// Convert a CMU Plaza data set (`*_DR.txt`, `*_TD.txt`, `*_.mat`) into a
-    /// range-beacon log.
-    FromPlaza(FromPlazaArgs),
-    /// Read every file of a log folder and report the first error (file, line, column).
-    Check(LogCheckArgs),
-}
-
-#[derive(Debug, Args)]
-struct ExampleArgs {
-    /// Which kind of log.
-    kind: KindArg,
-    /// The new log folder (must not hold a log).
-    dir: PathBuf,
-    /// Length of the log, s.
-    #[arg(long, value_name = "S", default_value_t = 300.0)]
-    duration: f64,
-    /// Seed of the simulated noise.
-    #[arg(long, value_name = "S", default_value_t = 1)]
-    seed: u64,
-    /// Leave out `truth.csv` (the replay then reports innovations only).
-    #[arg(long)]
-    no_truth: bool,
-}
-
-#[derive(Debug, Args)]
-struct FromPlazaArgs {
-    /// Folder holding the Plaza data set's files.
-    plaza_dir: PathBuf,
-    /// The new log folder.
-    dir: PathBuf,
-}
-
-#[derive(Debug, Args)]
-struct LogCheckArgs {
-    /// The log folder.
-    dir: PathBuf,
 }
 
 #[derive(Debug, Args)]
@@ -472,247 +359,6 @@ fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
     }
     text.push_str(&format!("\noutputs: {}\n", args.out.display()));
     Ok(text)
-}
-
-fn own_failure(e: OwnLogError) -> Failure {
-    let users = e.is_users();
-    let e = anyhow!(one_line(&error_chain(&e)));
-    if users {
-        Failure::Usage(e)
-    } else {
-        Failure::Run(e)
-    }
-}
-
-fn replay_own(kind: LogKind, args: &OwnArgs) -> Result<String, Failure> {
-    let (text, label) = match &args.config {
-        None => (
-            preset(kind).to_string(),
-            format!("built-in scenarios/{}.toml", kind.name()),
-        ),
-        Some(path) => {
-            let label = path.display().to_string();
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read settings file `{label}`"))
-                .map_err(Failure::Usage)?;
-            (text, label)
-        }
-    };
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("{}-replay", kind.name())));
-    let r = replay_dir(kind, &args.dir, &text, &label).map_err(own_failure)?;
-    write_outputs(&out, &r.files).map_err(|e| Failure::Run(anyhow!(one_line(&error_chain(&e)))))?;
-    Ok(format!(
-        "{}
-outputs: {}
-",
-        r.console,
-        out.display()
-    ))
-}
-
-fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
-    let usage =
-        |e: &(dyn std::error::Error + 'static)| Failure::Usage(anyhow!(one_line(&error_chain(e))));
-    match cmd {
-        LogCmd::Example(a) => {
-            let kind = a.kind.kind();
-            let files = match kind {
-                LogKind::RangeBeacon => range_beacon_example(a.duration, a.seed, !a.no_truth)
-                    .map_err(|e| usage(&e))?
-                    .to_files(),
-                LogKind::InsDvl => ins_dvl_example(a.duration, a.seed, !a.no_truth)
-                    .map_err(|e| usage(&e))?
-                    .to_files(),
-            };
-            let about = format!(
-                "simulated example ({} s, seed {}{}) written by `fathom log example`",
-                a.duration,
-                a.seed,
-                if a.no_truth { ", no truth" } else { "" }
-            );
-            write_log(&a.dir, &Manifest::new(kind, about), &files).map_err(|e| usage(&e))?;
-            Ok(format!(
-                "wrote a {} log into {} ({}); replay it with `fathom replay {} {}`\n",
-                kind.name(),
-                a.dir.display(),
-                files.iter().map(|f| f.0).collect::<Vec<_>>().join(", "),
-                kind.name(),
-                a.dir.display()
-            ))
-        }
-        LogCmd::FromPlaza(a) => {
-            let settings = parse_settings(
-                <Plaza as Experiment>::PRESET,
-                "built-in scenarios/plaza.toml",
-            )
-            .map_err(|e| Failure::Run(anyhow!(e)))?;
-            if !a.plaza_dir.is_dir() {
-                return Err(Failure::Usage(anyhow!(
-                    "cannot read the Plaza data: `{}` is not a folder",
-                    a.plaza_dir.display()
-                )));
-            }
-            let log =
-                PlazaLog::read_dir(&a.plaza_dir, settings.range_order).map_err(|e| usage(&e))?;
-            let rb = range_beacon_from_plaza(&log);
-            let about = format!(
-                "CMU Plaza data converted from `{}` by `fathom log from-plaza`",
-                a.plaza_dir.display()
-            );
-            write_log(
-                &a.dir,
-                &Manifest::new(LogKind::RangeBeacon, about),
-                &rb.to_files(),
-            )
-            .map_err(|e| usage(&e))?;
-            Ok(format!(
-                "wrote a range-beacon log into {}; replay it with `fathom replay range-beacon {} \
-                 --config scenarios/range-beacon-plaza.toml`\n",
-                a.dir.display(),
-                a.dir.display()
-            ))
-        }
-        LogCmd::Check(a) => {
-            let set = FileSet::read_dir(&a.dir).map_err(|e| usage(&e))?;
-            let kind = set.manifest.kind;
-            let rows = match kind {
-                LogKind::RangeBeacon => {
-                    let l = RangeBeaconLog::parse(&set).map_err(|e| usage(&e))?;
-                    format!("{} beacons, {} ranges", l.beacons.len(), l.ranges.len())
-                }
-                LogKind::InsDvl => {
-                    let l = InsDvlLog::parse(&set).map_err(|e| usage(&e))?;
-                    format!("{} IMU rows, {} DVL rows", l.imu.len(), l.dvl.len())
-                }
-            };
-            Ok(format!(
-                "ok: {} is a valid {} log ({}: {rows}; truth: {})\n",
-                a.dir.display(),
-                kind.name(),
-                set.files.keys().copied().collect::<Vec<_>>().join(", "),
-                if set.has("truth.csv") { "yes" } else { "no" }
-            ))
-        }
-    }
-}
-
-fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Failure> {
-    let registry = registry();
-    let label = args.scenario.display().to_string();
-    let text = std::fs::read_to_string(&args.scenario)
-        .with_context(|| format!("cannot read `{label}`"))
-        .map_err(Failure::Usage)?;
-    let exp = peek_experiment(&text, &label, &registry).map_err(failure)?;
-    let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("fathom-out").join(format!(
-            "{}-shard-{}-of-{}",
-            exp.name(),
-            shard.index,
-            shard.count
-        ))
-    });
-    let job = Job {
-        text: &text,
-        file: &label,
-        runs: args.runs,
-        seed: args.seed,
-        threads: args.threads,
-        progress: None,
-        env: Environment {
-            limits: args.limits.limits()?,
-            ..Environment::new(
-                std::env::current_dir()
-                    .context("cannot read the current directory")
-                    .map_err(Failure::Run)?,
-            )
-        },
-    };
-    let bar = progress_bar();
-    let job = Job {
-        progress: Some(run_hook(bar.clone())),
-        ..job
-    };
-    let outcome = run_shard(exp, &job, shard, &out, args.force);
-    if let Some(bar) = &bar {
-        bar.finish_and_clear();
-    }
-    let m = outcome.map_err(failure)?;
-    let mut text = format!(
-        "{} shard {}/{}: {:.1} s, manifest {}\n",
-        m.experiment,
-        shard.index,
-        shard.count,
-        m.elapsed_s,
-        out.join("manifest.json").display()
-    );
-    for b in &m.batches {
-        text.push_str(&format!(
-            "  {}: runs {}..{} of {}\n",
-            b.label, b.first, b.end, b.runs
-        ));
-    }
-    Ok(text)
-}
-
-fn merge_cmd(args: &MergeArgs) -> Result<String, Failure> {
-    let base_dir = std::env::current_dir()
-        .context("cannot read the current directory")
-        .map_err(Failure::Run)?;
-    let (result, m) = merge(
-        &registry(),
-        &args.dirs,
-        args.threads,
-        &base_dir,
-        &args.out,
-        args.force,
-    )
-    .map_err(failure)?;
-    Ok(format!(
-        "merged {} shard folders of `{}` ({} runs): {} ({} figures, report.md, summary.json)\n",
-        args.dirs.len(),
-        m.experiment,
-        result.summary.runs,
-        result.out_dir.display(),
-        result.figures.len()
-    ))
-}
-
-fn campaign_cmd(kind: &CampaignKind) -> Result<String, Failure> {
-    let CampaignKind::Slurm(args) = kind;
-    if args.shards == 0 || args.runs == 0 {
-        return Err(Failure::Usage(anyhow!(
-            "--runs and --shards must be at least 1"
-        )));
-    }
-    // The scenario must be valid before anything is submitted.
-    let (code, line) = check_command(&args.scenario, &registry());
-    if code != 0 {
-        return Err(Failure::Usage(anyhow!(line)));
-    }
-    let dir = args.dir.display().to_string();
-    let script = slurm_script(
-        &args.scenario.display().to_string(),
-        args.runs,
-        args.shards,
-        &dir,
-    );
-    std::fs::create_dir_all(&args.dir)
-        .with_context(|| format!("cannot create `{dir}`"))
-        .map_err(Failure::Usage)?;
-    let path = args.dir.join("campaign.sh");
-    std::fs::write(&path, script)
-        .with_context(|| format!("cannot write `{}`", path.display()))
-        .map_err(Failure::Usage)?;
-    Ok(format!(
-        "wrote {}: {} shards of {} runs and a dependent merge; submit with `bash {}`\n",
-        path.display(),
-        args.shards,
-        args.runs,
-        path.display()
-    ))
 }
 
 fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
