@@ -15,9 +15,7 @@ use super::N_STATES;
 use super::error::MapAidedError;
 use super::ins12::{Ins12Filter, NominalNav};
 use super::params::RangeSettings;
-use super::range_model::{
-    BaroHeight, BeamGeometry, RangeBeam, baro_row12, check_baro, check_beams,
-};
+use super::range_model::{BaroHeight, BeamGeometry, RangeBeam, baro_row12, check_update_inputs};
 
 /// What one GREKF update did.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -82,11 +80,7 @@ impl Grekf {
         caster: &dyn RayCaster,
     ) -> Result<GrekfReport, MapAidedError> {
         let t = filter.time();
-        nominal.check(t)?;
-        check_beams(beams, t, &mut self.dirs)?;
-        if let Some(b) = baro {
-            check_baro(b, t)?;
-        }
+        check_update_inputs(nominal, beams, baro, t, &mut self.dirs)?;
         let est = nominal.corrected(filter.error_mean());
         let c = est.nav_from_body.to_rotation_matrix().into_inner();
         self.rays.clear();
@@ -167,9 +161,8 @@ impl Grekf {
 mod tests {
     use super::*;
     use crate::map_aided::params::{Ins12Params, RangeParams};
-    use crate::map_aided::test_support::Planes;
+    use crate::map_aided::test_support::{Planes, nominal};
     use crate::map_aided::{ATT, POS};
-    use nalgebra::UnitQuaternion;
 
     fn beams_around(n: usize, range_of: impl Fn(&Vector3<f64>) -> f64) -> Vec<RangeBeam> {
         (0..n)
@@ -183,15 +176,6 @@ mod tests {
                 }
             })
             .collect()
-    }
-
-    fn nominal(pos: Vector3<f64>, yaw: f64) -> NominalNav {
-        NominalNav {
-            pos_in_nav: pos,
-            vel_in_nav: Vector3::zeros(),
-            nav_from_body: UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
-            accel_bias_in_body: Vector3::zeros(),
-        }
     }
 
     fn filter(t: f64) -> Ins12Filter {

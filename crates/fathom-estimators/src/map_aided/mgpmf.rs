@@ -33,7 +33,7 @@ use super::marginal::{
     LinearStep, LinearStepReport, Partition, normalize_log_weights, weighted_moments,
 };
 use super::params::MgpmfSettings;
-use super::range_model::{BaroHeight, RangeBeam, check_baro, check_beams};
+use super::range_model::{BaroHeight, RangeBeam, check_update_inputs};
 
 /// What one MGPMF update did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -108,11 +108,7 @@ impl Mgpmf {
         caster: &dyn RayCaster,
     ) -> Result<MgpmfReport, MapAidedError> {
         let t = filter.time();
-        nominal.check(t)?;
-        check_beams(beams, t, &mut self.dirs)?;
-        if let Some(b) = baro {
-            check_baro(b, t)?;
-        }
+        check_update_inputs(nominal, beams, baro, t, &mut self.dirs)?;
         let part = Partition::new(filter.error_mean(), filter.covariance()).ok_or_else(|| {
             MapAidedError::Filter(crate::EstimatorError::NotPositiveDefinite {
                 what: "covariance of the grid states".into(),
@@ -194,32 +190,10 @@ mod tests {
     use super::*;
     use crate::map_aided::grekf::Grekf;
     use crate::map_aided::params::{Ins12Params, MgpmfParams, RangeParams};
-    use crate::map_aided::test_support::Planes;
+    use crate::map_aided::test_support::{Planes, nominal, seven_dirs};
     use crate::map_aided::{ATT, POS};
-    use nalgebra::UnitQuaternion;
     use rand::SeedableRng;
     use rand_distr::{Distribution, Normal};
-
-    fn nominal(pos: Vector3<f64>, yaw: f64) -> NominalNav {
-        NominalNav {
-            pos_in_nav: pos,
-            vel_in_nav: Vector3::zeros(),
-            nav_from_body: UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
-            accel_bias_in_body: Vector3::zeros(),
-        }
-    }
-
-    /// 6 horizontal beams at 60 deg and one down (the paper's buildings sensors).
-    fn seven_dirs() -> Vec<Vector3<f64>> {
-        let mut d: Vec<_> = (0..6)
-            .map(|k| {
-                let a = k as f64 * std::f64::consts::FRAC_PI_3 + 0.3;
-                Vector3::new(a.cos(), a.sin(), 0.0)
-            })
-            .collect();
-        d.push(Vector3::z());
-        d
-    }
 
     fn measure(
         map: &Planes,

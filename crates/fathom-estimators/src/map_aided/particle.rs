@@ -40,7 +40,7 @@ use super::marginal::{
     LinearStep, LinearStepReport, Partition, normalize_log_weights, weighted_moments,
 };
 use super::params::ParticleSettings;
-use super::range_model::{BaroHeight, RangeBeam, check_baro, check_beams};
+use super::range_model::{BaroHeight, RangeBeam, check_update_inputs};
 
 /// What one particle-filter update did.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -123,11 +123,7 @@ impl ParticleFilter {
         rng: &mut impl Rng,
     ) -> Result<ParticleReport, MapAidedError> {
         let t = filter.time();
-        nominal.check(t)?;
-        check_beams(beams, t, &mut self.dirs)?;
-        if let Some(b) = baro {
-            check_baro(b, t)?;
-        }
+        check_update_inputs(nominal, beams, baro, t, &mut self.dirs)?;
         let not_pd = || {
             MapAidedError::Filter(crate::EstimatorError::NotPositiveDefinite {
                 what: "covariance of the particle states".into(),
@@ -230,27 +226,13 @@ mod tests {
     use super::*;
     use crate::map_aided::ATT;
     use crate::map_aided::params::{Ins12Params, MgpmfParams, ParticleParams};
-    use crate::map_aided::test_support::Planes;
-    use nalgebra::UnitQuaternion;
+    use crate::map_aided::test_support::{Planes, nominal, seven_dirs};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
-    fn nominal(pos: Vector3<f64>, yaw: f64) -> NominalNav {
-        NominalNav {
-            pos_in_nav: pos,
-            vel_in_nav: Vector3::zeros(),
-            nav_from_body: UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
-            accel_bias_in_body: Vector3::zeros(),
-        }
-    }
-
     fn beams(map: &Planes, truth: &NominalNav) -> Vec<RangeBeam> {
-        (0..6)
-            .map(|k| {
-                let a = k as f64 * std::f64::consts::FRAC_PI_3 + 0.3;
-                Vector3::new(a.cos(), a.sin(), 0.0)
-            })
-            .chain([Vector3::z()])
+        seven_dirs()
+            .into_iter()
             .filter_map(|d| {
                 map.cast(&truth.pos_in_nav, &(truth.nav_from_body * d), 60.0)
                     .map(|h| RangeBeam {

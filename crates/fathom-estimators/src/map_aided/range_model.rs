@@ -33,6 +33,7 @@ use fathom_core::{RayHit, Time};
 use nalgebra::{RowSVector, Vector3};
 
 use super::error::{MapAidedError, finite_input, positive_input};
+use super::ins12::NominalNav;
 use super::{ATT, N_STATES, POS};
 
 /// One range measurement of a body-fixed beam (range finder or one lidar beam).
@@ -96,6 +97,26 @@ pub(crate) fn check_beams(
 pub(crate) fn check_baro(baro: &BaroHeight, time: Time) -> Result<(), MapAidedError> {
     finite_input("baro height_m", &[baro.height_m], time)?;
     positive_input("baro sigma_m", 0, baro.sigma_m, time)?;
+    Ok(())
+}
+
+/// Checks every input of a map-aided update at filter time `time`: the nominal
+/// state, the beams (their unit body directions into `unit_dirs`) and the barometer.
+///
+/// # Errors
+/// [`MapAidedError::InvalidInput`] naming the first bad value, at `time`.
+pub(crate) fn check_update_inputs(
+    nominal: &NominalNav,
+    beams: &[RangeBeam],
+    baro: Option<&BaroHeight>,
+    time: Time,
+    unit_dirs: &mut Vec<Vector3<f64>>,
+) -> Result<(), MapAidedError> {
+    nominal.check(time)?;
+    check_beams(beams, time, unit_dirs)?;
+    if let Some(b) = baro {
+        check_baro(b, time)?;
+    }
     Ok(())
 }
 

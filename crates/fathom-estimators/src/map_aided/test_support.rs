@@ -3,7 +3,30 @@
 
 use fathom_core::raycast::MIN_RANGE;
 use fathom_core::{Material, RayCaster, RayHit};
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
+
+use super::NominalNav;
+
+/// A level nominal state at `pos` with heading `yaw`, at rest, without bias.
+pub(crate) fn nominal(pos: Vector3<f64>, yaw: f64) -> NominalNav {
+    NominalNav {
+        pos_in_nav: pos,
+        vel_in_nav: Vector3::zeros(),
+        nav_from_body: UnitQuaternion::from_euler_angles(0.0, 0.0, yaw),
+        accel_bias_in_body: Vector3::zeros(),
+    }
+}
+
+/// Six horizontal beams 60 deg apart and one down (the paper's buildings sensors).
+pub(crate) fn seven_dirs() -> Vec<Vector3<f64>> {
+    (0..6)
+        .map(|k| {
+            let a = k as f64 * std::f64::consts::FRAC_PI_3 + 0.3;
+            Vector3::new(a.cos(), a.sin(), 0.0)
+        })
+        .chain([Vector3::z()])
+        .collect()
+}
 
 /// Infinite planes `n . x = c` (unit `n`); the closest hit wins.
 #[derive(Debug, Clone, PartialEq)]
