@@ -381,14 +381,18 @@ mod tests {
         );
     }
 
+    /// The message of a cost the default limits refuse.
+    fn refusal(c: &Cost) -> String {
+        c.check(&Limits::default(), "f.toml")
+            .unwrap_err()
+            .to_string()
+    }
+
     #[test]
     fn a_refusal_names_the_largest_part_and_the_limit() {
         let mut c = cost();
         c.terms[1].bytes = 1e12;
-        let e = c
-            .check(&Limits::default(), "f.toml")
-            .unwrap_err()
-            .to_string();
+        let e = refusal(&c);
         assert!(
             e.starts_with("f.toml: key `runs`: the run would need about 931 GiB"),
             "{e}"
@@ -396,10 +400,7 @@ mod tests {
         assert!(e.contains("limit of 4 GiB"), "{e}");
         let mut c = cost();
         c.terms[0].samples = 1e15;
-        let e = c
-            .check(&Limits::default(), "f.toml")
-            .unwrap_err()
-            .to_string();
+        let e = refusal(&c);
         assert!(
             e.starts_with("f.toml: key `motion.duration_s`: the run would take"),
             "{e}"
@@ -407,10 +408,7 @@ mod tests {
         assert!(e.contains("`motion.step_s` = 0.01"), "{e}");
         // The key named is the one furthest beyond the preset.
         c.terms[0].keys[1].factor = 1e9;
-        let e = c
-            .check(&Limits::default(), "f.toml")
-            .unwrap_err()
-            .to_string();
+        let e = refusal(&c);
         assert!(e.starts_with("f.toml: key `motion.step_s`:"), "{e}");
         // NaN and infinite estimates are refused, not let through.
         c.terms[0].samples = f64::NAN;

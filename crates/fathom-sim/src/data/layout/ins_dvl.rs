@@ -11,14 +11,15 @@
 //! | `rpm.csv` | `time[s], rpm[rpm]` | propeller speed (optional; the VKF needs it) |
 //! | `truth.csv` | `time[s], north[m], east[m], depth[m], (vel_north[m/s], vel_east[m/s], vel_down[m/s])` | ground truth: north and east from the start position, depth (optional) |
 
+pub use super::DEPTH;
 use super::table::{Check, ColumnSpec as C, FileSpec, Table, TimeOrder};
 use super::units::Quantity::{Acceleration, Angle, AngularRate, Count, Length, Rpm, Speed, Time};
 use super::{FileSet, LogError, LogKind, single_row};
 
 /// `initial.csv`.
-pub const INITIAL: FileSpec = FileSpec {
-    file: "initial.csv",
-    columns: &[
+pub const INITIAL: FileSpec = FileSpec::timed(
+    "initial.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("latitude", Angle, Check::Latitude),
         C::required("longitude", Angle, Check::Any),
@@ -30,9 +31,7 @@ pub const INITIAL: FileSpec = FileSpec {
         C::required("pitch", Angle, Check::Any),
         C::required("heading", Angle, Check::Any),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// The IMU increment columns.
 const INCREMENTS: &[&str] = &["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z"];
@@ -64,56 +63,39 @@ pub const IMU: FileSpec = FileSpec {
 };
 
 /// `dvl.csv` (body-frame velocity: x forward, y right, z down).
-pub const DVL: FileSpec = FileSpec {
-    file: "dvl.csv",
-    columns: &[
+pub const DVL: FileSpec = FileSpec::timed(
+    "dvl.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("u", Speed, Check::Any),
         C::required("v", Speed, Check::Any),
         C::required("w", Speed, Check::Any),
         C::optional("bottom_lock", Count, Check::Flag),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
-
-/// `depth.csv`.
-pub const DEPTH: FileSpec = FileSpec {
-    file: "depth.csv",
-    columns: &[
-        C::required("time", Time, Check::Any),
-        C::required("depth", Length, Check::Any),
-    ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// `altitude.csv` (echo sounder).
-pub const ALTITUDE: FileSpec = FileSpec {
-    file: "altitude.csv",
-    columns: &[
+pub const ALTITUDE: FileSpec = FileSpec::timed(
+    "altitude.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("altitude", Length, Check::NonNegative),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// `rpm.csv`.
-pub const RPM: FileSpec = FileSpec {
-    file: "rpm.csv",
-    columns: &[
+pub const RPM: FileSpec = FileSpec::timed(
+    "rpm.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("rpm", Rpm, Check::Any),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// `truth.csv` (north and east from the start position, depth).
-pub const TRUTH: FileSpec = FileSpec {
-    file: "truth.csv",
-    columns: &[
+pub const TRUTH: FileSpec = FileSpec::timed(
+    "truth.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("north", Length, Check::Any),
         C::required("east", Length, Check::Any),
@@ -122,9 +104,7 @@ pub const TRUTH: FileSpec = FileSpec {
         C::optional("vel_east", Speed, Check::Any),
         C::optional("vel_down", Speed, Check::Any),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// Every file of the kind.
 pub const SPECS: [FileSpec; 7] = [INITIAL, IMU, DVL, DEPTH, ALTITUDE, RPM, TRUTH];

@@ -29,6 +29,15 @@ pub use error::{Cell, LogError};
 pub use table::{Check, ColumnSpec, FileSpec, Table, TimeOrder, expected_header, parse_table};
 pub use units::Quantity;
 
+/// `depth.csv` (down positive), shared by both kinds.
+pub const DEPTH: FileSpec = FileSpec::timed(
+    "depth.csv",
+    &[
+        ColumnSpec::required("time", Quantity::Time, Check::Any),
+        ColumnSpec::required("depth", Quantity::Length, Check::Any),
+    ],
+);
+
 /// The manifest's file name.
 pub const MANIFEST: &str = "log.toml";
 /// The `format` value of a manifest.

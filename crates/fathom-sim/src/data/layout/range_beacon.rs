@@ -17,6 +17,7 @@
 
 use std::collections::BTreeMap;
 
+pub use super::DEPTH;
 use super::table::{Check, ColumnSpec as C, FileSpec, Table, TimeOrder};
 use super::units::Quantity::{Angle, Count, Length, Speed, Time};
 use super::{FileSet, LogError, LogKind, single_row};
@@ -35,54 +36,46 @@ pub const BEACONS: FileSpec = FileSpec {
 };
 
 /// `initial.csv`.
-pub const INITIAL: FileSpec = FileSpec {
-    file: "initial.csv",
-    columns: &[
+pub const INITIAL: FileSpec = FileSpec::timed(
+    "initial.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("north", Length, Check::Any),
         C::required("east", Length, Check::Any),
         C::optional("down", Length, Check::Any),
         C::required("heading", Angle, Check::Any),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// `odometry.csv`.
-pub const ODOMETRY: FileSpec = FileSpec {
-    file: "odometry.csv",
-    columns: &[
+pub const ODOMETRY: FileSpec = FileSpec::timed(
+    "odometry.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("distance", Length, Check::Any),
         C::required("heading_change", Angle, Check::Any),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// `dvl.csv` (body-frame velocity: x forward, y right, z down).
-pub const DVL: FileSpec = FileSpec {
-    file: "dvl.csv",
-    columns: &[
+pub const DVL: FileSpec = FileSpec::timed(
+    "dvl.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("u", Speed, Check::Any),
         C::required("v", Speed, Check::Any),
         C::required("w", Speed, Check::Any),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// `heading.csv` (clockwise from north).
-pub const HEADING: FileSpec = FileSpec {
-    file: "heading.csv",
-    columns: &[
+pub const HEADING: FileSpec = FileSpec::timed(
+    "heading.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("heading", Angle, Check::Any),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// `ranges.csv` (several beacons may share a stamp).
 pub const RANGES: FileSpec = FileSpec {
@@ -96,30 +89,17 @@ pub const RANGES: FileSpec = FileSpec {
     time: TimeOrder::NonDecreasing,
 };
 
-/// `depth.csv` (down positive).
-pub const DEPTH: FileSpec = FileSpec {
-    file: "depth.csv",
-    columns: &[
-        C::required("time", Time, Check::Any),
-        C::required("depth", Length, Check::Any),
-    ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
-
 /// `truth.csv`.
-pub const TRUTH: FileSpec = FileSpec {
-    file: "truth.csv",
-    columns: &[
+pub const TRUTH: FileSpec = FileSpec::timed(
+    "truth.csv",
+    &[
         C::required("time", Time, Check::Any),
         C::required("north", Length, Check::Any),
         C::required("east", Length, Check::Any),
         C::optional("down", Length, Check::Any),
         C::optional("heading", Angle, Check::Any),
     ],
-    groups: &[],
-    time: TimeOrder::Increasing,
-};
+);
 
 /// Every file of the kind.
 pub const SPECS: [FileSpec; 8] = [

@@ -90,6 +90,19 @@ pub struct FileSpec {
     pub time: TimeOrder,
 }
 
+impl FileSpec {
+    /// A file of one row per stamp with increasing `time` and no alternative
+    /// column groups (most sensor files).
+    pub const fn timed(file: &'static str, columns: &'static [ColumnSpec]) -> Self {
+        Self {
+            file,
+            columns,
+            groups: &[],
+            time: TimeOrder::Increasing,
+        }
+    }
+}
+
 /// A file read against its [`FileSpec`]: the values of every present column in SI,
 /// column-major, and the line of every row.
 #[derive(Debug, Clone, PartialEq)]

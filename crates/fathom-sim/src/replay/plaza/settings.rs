@@ -306,32 +306,9 @@ impl PlazaToml {
                 ));
             }
         };
-        let o = &self.odometry;
         let r = &self.ranges;
         let rb = &self.robust;
-        if rb.recovery_after == 0 {
-            return Err(SimError::invalid(
-                file,
-                "robust.recovery_after",
-                "must be at least 1",
-            ));
-        }
-        if !(rb.recovery_inflation.is_finite() && rb.recovery_inflation > 1.0) {
-            return Err(SimError::invalid(
-                file,
-                "robust.recovery_inflation",
-                format!("must be > 1, got {}", rb.recovery_inflation),
-            ));
-        }
-        let huber_k = require_positive(file, "robust.huber_k", rb.huber_k)?;
-        let reject_sigma = require_positive(file, "robust.reject_sigma", rb.reject_sigma)?;
-        if reject_sigma < huber_k {
-            return Err(SimError::invalid(
-                file,
-                "robust.reject_sigma",
-                format!("must be >= robust.huber_k ({huber_k}), got {reject_sigma}"),
-            ));
-        }
+        let (huber_k, reject_sigma) = rb.check(file)?;
         Ok(PlazaSettings {
             smooth: self.smooth,
             data_dir: self.data.dir.clone(),
@@ -346,24 +323,7 @@ impl PlazaToml {
                 "initial.heading_sigma_rad",
                 self.initial.heading_sigma_rad,
             )?,
-            odometry: WheelOdometryParams {
-                distance_sigma_per_sqrt_m: require_non_negative(
-                    file,
-                    "odometry.distance_sigma_per_sqrt_m",
-                    o.distance_sigma_per_sqrt_m,
-                )?,
-                heading_sigma_per_sqrt_m: require_non_negative(
-                    file,
-                    "odometry.heading_sigma_per_sqrt_m",
-                    o.heading_sigma_per_sqrt_m,
-                )?,
-                heading_sigma_per_sqrt_rad: require_non_negative(
-                    file,
-                    "odometry.heading_sigma_per_sqrt_rad",
-                    o.heading_sigma_per_sqrt_rad,
-                )?,
-                calibration_random_walk: Vec::new(),
-            },
+            odometry: self.odometry.check(file)?,
             range_sigma: require_positive(file, "ranges.sigma_m", r.sigma_m)?,
             correlation_sigma: require_non_negative(
                 file,
@@ -403,6 +363,67 @@ impl PlazaToml {
                 self.ablation.hard_gate_sigma,
             )?,
         })
+    }
+}
+
+impl OdometryToml {
+    /// Checks the noise densities (every key ≥ 0) into the filter's parameters.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming `odometry.<key>`.
+    pub fn check(&self, file: &str) -> Result<WheelOdometryParams, SimError> {
+        Ok(WheelOdometryParams {
+            distance_sigma_per_sqrt_m: require_non_negative(
+                file,
+                "odometry.distance_sigma_per_sqrt_m",
+                self.distance_sigma_per_sqrt_m,
+            )?,
+            heading_sigma_per_sqrt_m: require_non_negative(
+                file,
+                "odometry.heading_sigma_per_sqrt_m",
+                self.heading_sigma_per_sqrt_m,
+            )?,
+            heading_sigma_per_sqrt_rad: require_non_negative(
+                file,
+                "odometry.heading_sigma_per_sqrt_rad",
+                self.heading_sigma_per_sqrt_rad,
+            )?,
+            calibration_random_walk: Vec::new(),
+        })
+    }
+}
+
+impl RobustToml {
+    /// Checks the robust handling's keys; returns the Huber threshold and the
+    /// rejection threshold (`huber_k <= reject_sigma`).
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming `robust.<key>`.
+    pub fn check(&self, file: &str) -> Result<(f64, f64), SimError> {
+        if self.recovery_after == 0 {
+            return Err(SimError::invalid(
+                file,
+                "robust.recovery_after",
+                "must be at least 1",
+            ));
+        }
+        if !(self.recovery_inflation.is_finite() && self.recovery_inflation > 1.0) {
+            return Err(SimError::invalid(
+                file,
+                "robust.recovery_inflation",
+                format!("must be > 1, got {}", self.recovery_inflation),
+            ));
+        }
+        let huber_k = require_positive(file, "robust.huber_k", self.huber_k)?;
+        let reject_sigma = require_positive(file, "robust.reject_sigma", self.reject_sigma)?;
+        if reject_sigma < huber_k {
+            return Err(SimError::invalid(
+                file,
+                "robust.reject_sigma",
+                format!("must be >= robust.huber_k ({huber_k}), got {reject_sigma}"),
+            ));
+        }
+        Ok((huber_k, reject_sigma))
     }
 }
 

@@ -3,7 +3,6 @@
 //! check into [`RangeBeaconSettings`].
 
 use fathom_estimators::schemes::UpdateScheme;
-use fathom_estimators::wheel_odometry::WheelOdometryParams;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -301,32 +300,9 @@ impl RangeBeaconToml {
     /// [`SimError::Invalid`] naming the key (`methods[2].scheme`, ...).
     pub fn check(&self, file: &str) -> Result<RangeBeaconSettings, SimError> {
         require_experiment(file, &self.experiment, "range-beacon")?;
-        let o = &self.odometry;
         let r = &self.ranges;
         let rb = &self.robust;
-        if rb.recovery_after == 0 {
-            return Err(SimError::invalid(
-                file,
-                "robust.recovery_after",
-                "must be at least 1",
-            ));
-        }
-        if !(rb.recovery_inflation.is_finite() && rb.recovery_inflation > 1.0) {
-            return Err(SimError::invalid(
-                file,
-                "robust.recovery_inflation",
-                format!("must be > 1, got {}", rb.recovery_inflation),
-            ));
-        }
-        let huber_k = require_positive(file, "robust.huber_k", rb.huber_k)?;
-        let reject_sigma = require_positive(file, "robust.reject_sigma", rb.reject_sigma)?;
-        if reject_sigma < huber_k {
-            return Err(SimError::invalid(
-                file,
-                "robust.reject_sigma",
-                format!("must be >= robust.huber_k ({huber_k}), got {reject_sigma}"),
-            ));
-        }
+        let (huber_k, reject_sigma) = rb.check(file)?;
         let engine = PlazaSettings {
             data_dir: self.data.dir.clone(),
             smooth: false,
@@ -341,24 +317,7 @@ impl RangeBeaconToml {
                 "initial.heading_sigma_rad",
                 self.initial.heading_sigma_rad,
             )?,
-            odometry: WheelOdometryParams {
-                distance_sigma_per_sqrt_m: require_non_negative(
-                    file,
-                    "odometry.distance_sigma_per_sqrt_m",
-                    o.distance_sigma_per_sqrt_m,
-                )?,
-                heading_sigma_per_sqrt_m: require_non_negative(
-                    file,
-                    "odometry.heading_sigma_per_sqrt_m",
-                    o.heading_sigma_per_sqrt_m,
-                )?,
-                heading_sigma_per_sqrt_rad: require_non_negative(
-                    file,
-                    "odometry.heading_sigma_per_sqrt_rad",
-                    o.heading_sigma_per_sqrt_rad,
-                )?,
-                calibration_random_walk: Vec::new(),
-            },
+            odometry: self.odometry.check(file)?,
             range_sigma: require_positive(file, "ranges.sigma_m", r.sigma_m)?,
             correlation_sigma: require_non_negative(
                 file,
