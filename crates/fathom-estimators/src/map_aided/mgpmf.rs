@@ -32,7 +32,7 @@ use super::likelihood::{RayBuffers, model};
 use super::marginal::{
     LinearStep, LinearStepReport, Partition, normalize_log_weights, weighted_moments,
 };
-use super::params::MgpmfSettings;
+use super::params::{GridPosterior, MgpmfSettings};
 use super::range_model::{BaroHeight, RangeBeam, check_update_inputs};
 
 /// What one MGPMF update did.
@@ -50,6 +50,9 @@ pub struct MgpmfReport {
     pub spacing: Vector3<f64>,
     /// Posterior mean of `n = (dp_N, dp_E, psi_D)`.
     pub n_mean: Vector3<f64>,
+    /// [`GridPosterior::Information`] gave the covariance (false: the interpolated
+    /// grid covariance, by setting or as its fallback).
+    pub information_used: bool,
     /// The linear step.
     pub linear: LinearStepReport,
 }
@@ -161,7 +164,15 @@ impl Mgpmf {
         )?;
         let (n_mean, cov) = weighted_moments(&self.points, &self.weights);
         let hat = Matrix3::from_diagonal(&spacing.component_mul(&spacing)) / 6.0;
-        let n_cov = cov + hat;
+        let interpolated = cov + hat;
+        let (n_cov, information_used) = match s.posterior {
+            GridPosterior::Interpolated => (interpolated, false),
+            GridPosterior::Information => {
+                let prior_cov = prior_grid_covariance(&self.points, &part) + hat;
+                information_posterior(&part.p_nn_inv, &interpolated, &prior_cov)
+                    .map_or((interpolated, false), |c| (c, true))
+            }
+        };
         let linear = self.linear.update_and_commit(
             filter, &part, nominal, beams, &self.dirs, baro, &n_mean, &n_cov, &s.range, caster,
         )?;
@@ -180,9 +191,41 @@ impl Mgpmf {
             effective_points,
             spacing,
             n_mean,
+            information_used,
             linear,
         })
     }
+}
+
+/// Covariance of the grid's points weighted by the prior `N(mu_n, P_nn)` alone (no
+/// likelihood): what the discretization makes of the prior. The grid is symmetric
+/// about `mu_n`, so that is its weighted mean.
+fn prior_grid_covariance(points: &[Vector3<f64>], part: &Partition) -> Matrix3<f64> {
+    let mut total = 0.0;
+    let mut cov = Matrix3::zeros();
+    for x in points {
+        let d = x - part.mu_n;
+        let w = (-0.5 * d.dot(&(part.p_nn_inv * d))).exp();
+        total += w;
+        cov += d * d.transpose() * w;
+    }
+    cov / total
+}
+
+/// `(P_nn^-1 + C_post^-1 - C_prior^-1)^-1` ([`GridPosterior::Information`]);
+/// `None` when the information is not positive definite.
+fn information_posterior(
+    p_nn_inv: &Matrix3<f64>,
+    c_post: &Matrix3<f64>,
+    c_prior: &Matrix3<f64>,
+) -> Option<Matrix3<f64>> {
+    let post_inv = c_post.cholesky()?.inverse();
+    let prior_inv = c_prior.cholesky()?.inverse();
+    let info = p_nn_inv + post_inv - prior_inv;
+    let info = (info + info.transpose()) * 0.5;
+    let cov = info.cholesky()?.inverse();
+    let cov = (cov + cov.transpose()) * 0.5;
+    cov.cholesky().map(|_| cov)
 }
 
 #[cfg(test)]
@@ -266,6 +309,52 @@ mod tests {
         let (pts, w) = m.last_grid();
         assert_eq!(pts.len(), w.len());
         assert!((w.iter().sum::<f64>() - 1.0).abs() < 1e-12);
+    }
+
+    /// On a coarse grid (9 x 9 x 3 over +-3 sigma) the paper's interpolated
+    /// covariance inflates the axis the ranges do not see (along the corridor) at
+    /// every update; the information form keeps that axis at its prior, and both
+    /// agree on the observed cross-corridor axis.
+    #[test]
+    fn information_posterior_does_not_inflate_an_unobserved_axis() {
+        let map = Planes::corridor(5.0);
+        let truth = nominal(Vector3::new(0.0, 1.0, -2.0), 0.2);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let beams = measure(&map, &truth, &seven_dirs(), 0.3, &mut rng);
+        let run = |posterior| {
+            let mut f = filter(0.1, 0.02, 0.0);
+            let mut m = Mgpmf::new(
+                MgpmfParams {
+                    grid_points: [9, 9, 3],
+                    posterior,
+                    ..MgpmfParams::default()
+                }
+                .check()
+                .unwrap(),
+            );
+            let mut used = 0;
+            for _ in 0..10 {
+                let rep = m.update(&mut f, &truth, &beams, None, &map).unwrap();
+                used += usize::from(rep.information_used);
+                let _ = f.take_correction();
+            }
+            (
+                f.covariance()[(POS, POS)],
+                f.covariance()[(POS + 1, POS + 1)],
+                used,
+            )
+        };
+        let (along_paper, cross_paper, used_paper) = run(GridPosterior::Interpolated);
+        let (along_info, cross_info, used_info) = run(GridPosterior::Information);
+        assert_eq!((used_paper, used_info), (0, 10));
+        // prior variance 0.01 m^2 along the corridor: 10 updates of the paper's
+        // covariance multiply it (negative control), the information form keeps it
+        assert!(along_paper > 0.02, "{along_paper}");
+        assert!((along_info / 0.01 - 1.0).abs() < 0.05, "{along_info}");
+        assert!(
+            cross_info < 0.01 && cross_paper < 0.01,
+            "{cross_info} {cross_paper}"
+        );
     }
 
     /// Started 3 m off (sigma 3 m) in a corner, one MGPMF update brings the estimate

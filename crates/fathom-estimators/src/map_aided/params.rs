@@ -262,8 +262,31 @@ pub struct MgpmfParams {
     pub k_sigma: f64,
     /// Outlier probability `eps` of the robust likelihood. Default 0.05.
     pub outlier_probability: f64,
+    /// How the grid's moments become the posterior covariance of `n`. Default
+    /// [`GridPosterior::Interpolated`] (the paper's).
+    pub posterior: GridPosterior,
     /// Ray casting and the linear step's gate.
     pub range: RangeParams,
+}
+
+/// How the MGPMF turns the weighted grid into the posterior covariance of the
+/// nonlinear states.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GridPosterior {
+    /// The paper's eq. (18) with its linear interpolation: the weighted covariance
+    /// of the points plus each point's hat-function variance `spacing^2 / 6`. On an
+    /// axis the ranges do not inform, this is broader than the prior by the
+    /// discretization (e.g. 1.5x the prior variance per update with 3 points over
+    /// +-3 sigma), so repeated updates can inflate `P` without bound.
+    #[default]
+    Interpolated,
+    /// The same grid moments used only for the information the ranges add: the
+    /// posterior information is `P_nn^-1 + (C_post^-1 - C_prior^-1)`, where `C_post`
+    /// and `C_prior` are the interpolated grid covariances with and without the
+    /// likelihood, so the discretization cancels and a flat likelihood returns the
+    /// prior exactly. Where that information is not positive definite (a likelihood
+    /// that spreads the weight beyond the prior) it falls back to `C_post`.
+    Information,
 }
 
 impl Default for MgpmfParams {
@@ -272,6 +295,7 @@ impl Default for MgpmfParams {
             grid_points: [41, 41, 9],
             k_sigma: 3.0,
             outlier_probability: 0.05,
+            posterior: GridPosterior::Interpolated,
             range: RangeParams::default(),
         }
     }
@@ -283,6 +307,7 @@ pub struct MgpmfSettings {
     pub(crate) grid_points: [usize; 3],
     pub(crate) k_sigma: f64,
     pub(crate) outlier_probability: f64,
+    pub(crate) posterior: GridPosterior,
     pub(crate) range: RangeSettings,
 }
 
@@ -300,6 +325,16 @@ impl MgpmfSettings {
     /// The range settings.
     pub fn range(&self) -> &RangeSettings {
         &self.range
+    }
+
+    /// How the grid becomes the posterior covariance.
+    pub fn posterior(&self) -> GridPosterior {
+        self.posterior
+    }
+
+    /// The same settings with another posterior covariance (it has no constraint).
+    pub fn with_posterior(self, posterior: GridPosterior) -> Self {
+        Self { posterior, ..self }
     }
 }
 
@@ -335,6 +370,7 @@ impl MgpmfParams {
         Ok(MgpmfSettings {
             grid_points: self.grid_points,
             k_sigma: k,
+            posterior: self.posterior,
             outlier_probability: check_outlier(
                 "mgpmf.outlier_probability",
                 self.outlier_probability,

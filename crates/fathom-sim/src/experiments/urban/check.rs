@@ -5,8 +5,9 @@ use fathom_core::units::{
     deg_per_sqrt_hour_to_rad_per_sqrt_s, deg_to_rad, milli_g_to_mps2, per_sqrt_hour_to_per_sqrt_s,
 };
 use fathom_estimators::map_aided::{
-    GpsAiding, GpsParams, ImuNoise, Ins12Filter, Ins12Params, Matrix12, MgpmfParams, MgpmfSettings,
-    ParticleParams, ParticleSettings, RangeParams, RangeSettings, SwitchParams, SwitchSettings,
+    GpsAiding, GpsParams, GridPosterior, ImuNoise, Ins12Filter, Ins12Params, Matrix12, MgpmfParams,
+    MgpmfSettings, ParticleParams, ParticleSettings, RangeParams, RangeSettings, SwitchParams,
+    SwitchSettings,
 };
 use fathom_map::ImportSettings;
 use fathom_map::presets::{Bridge, Buildings};
@@ -124,6 +125,8 @@ pub enum AblationKind {
     LidarStep(Box<RangeSensor>, f64),
     /// The controller flies on the method's estimate.
     ControlOnEstimate,
+    /// The MGPMF with this posterior covariance instead of the main batch's.
+    GridPosterior(GridPosterior),
 }
 
 /// One ablation batch.
@@ -144,6 +147,12 @@ impl Ablation {
             AblationKind::GaussianRanges(_) => "gaussian_ranges".into(),
             AblationKind::LidarStep(_, step) => format!("lidar_step_{step}deg"),
             AblationKind::ControlOnEstimate => "control_on_estimate".into(),
+            AblationKind::GridPosterior(GridPosterior::Interpolated) => {
+                "posterior_interpolated".into()
+            }
+            AblationKind::GridPosterior(GridPosterior::Information) => {
+                "posterior_information".into()
+            }
         }
     }
 }
@@ -525,10 +534,22 @@ impl UrbanScenario {
             .check()
             .map_err(|e| model_err(file, "filter", e))?;
         let m = &self.mgpmf;
+        let posterior = match m.posterior.as_deref() {
+            None | Some("interpolated") => GridPosterior::Interpolated,
+            Some("information") => GridPosterior::Information,
+            Some(other) => {
+                return Err(SimError::invalid(
+                    file,
+                    "mgpmf.posterior",
+                    format!("must be \"interpolated\" or \"information\", got {other:?}"),
+                ));
+            }
+        };
         let mgpmf_params = MgpmfParams {
             grid_points: m.grid_points,
             k_sigma: m.k_sigma,
             outlier_probability: m.outlier_probability,
+            posterior,
             range: range_params,
         };
         let mgpmf = mgpmf_params
@@ -729,6 +750,26 @@ impl UrbanScenario {
             )?;
             ablations.push(Ablation {
                 kind: AblationKind::ControlOnEstimate,
+                scene,
+                method,
+            });
+        }
+        if let Some(t) = &a.mgpmf_posterior {
+            let key = "ablations.mgpmf_posterior";
+            let (scene, method) = target(file, key, &t.scenario, &t.method, &scenes)?;
+            if method != Method::Mgpmf {
+                return Err(SimError::invalid(
+                    file,
+                    format!("{key}.method"),
+                    format!("must be \"MGPMF\", got {:?}", t.method),
+                ));
+            }
+            let other = match mgpmf.posterior() {
+                GridPosterior::Interpolated => GridPosterior::Information,
+                GridPosterior::Information => GridPosterior::Interpolated,
+            };
+            ablations.push(Ablation {
+                kind: AblationKind::GridPosterior(other),
                 scene,
                 method,
             });

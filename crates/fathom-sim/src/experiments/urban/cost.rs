@@ -86,6 +86,7 @@ pub(super) fn terms(s: &UrbanScenario) -> Vec<CostTerm> {
         s.ablations.gaussian_ranges.is_some(),
         s.ablations.lidar_step.is_some(),
         s.ablations.control_on_estimate.is_some(),
+        s.ablations.mgpmf_posterior.is_some(),
     ]
     .iter()
     .filter(|&&a| a)

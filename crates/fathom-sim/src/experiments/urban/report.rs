@@ -264,6 +264,12 @@ fn ablation_text(prep: &Prepared, rows: &[Row]) -> String {
                 "glass treated as opaque (Gaussian range noise only, the paper's simulation)"
             }
             "control_on_estimate" => "the controller flying on the estimate",
+            "posterior_information" => {
+                "the MGPMF's posterior covariance in information form (discretization cancelled)"
+            }
+            "posterior_interpolated" => {
+                "the MGPMF's posterior covariance as the paper's eq. (18) with the interpolation term"
+            }
             _ => "another lidar step",
         };
         md.push_str(&format!(

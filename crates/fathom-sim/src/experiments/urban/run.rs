@@ -15,7 +15,7 @@ use nalgebra::Vector3;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
-use super::check::{Ablation, AblationKind};
+use super::check::{Ablation, AblationKind, FilterSetup};
 use super::closed_loop;
 use super::nav::{Method, Nav, NavCounts, NavEnv, los_satellites};
 use super::record::{
@@ -405,6 +405,20 @@ pub(super) fn ablation_run(
         }
         AblationKind::ControlOnEstimate => {
             closed_loop::fly_on_estimate(prep, &env, ablation, dx0, &streams)?
+        }
+        AblationKind::GridPosterior(posterior) => {
+            let sensor = sensor_of(prep, spec.ranging);
+            let flown = fly_and_sense(prep, scene, spec.ranging, sensor, &streams)?;
+            let filter = FilterSetup {
+                mgpmf: prep.checked.filter.mgpmf.with_posterior(*posterior),
+                ..prep.checked.filter
+            };
+            let env = NavEnv {
+                filter: &filter,
+                ..env
+            };
+            let r = run_method(prep, &env, ablation.method, &flown, dx0, &streams, None)?;
+            method_record(prep, ablation.method, &r)?
         }
     };
     Ok(RunRecord {

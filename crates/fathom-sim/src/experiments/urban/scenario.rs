@@ -383,6 +383,16 @@ pub struct MgpmfToml {
     ///
     /// Range: ≥ 1.
     pub lidar_beam_stride: usize,
+    /// How the weighted grid becomes the posterior covariance: `"interpolated"`, the
+    /// paper's eq. (18) plus the hat-function variance of its linear interpolation
+    /// (broader than the prior on an axis the ranges do not inform, so it can grow
+    /// without bound on a coarse grid), or `"information"`, the information the grid
+    /// adds to the prior with the discretization cancelled (docs/reproduction.md).
+    /// Absent: `"interpolated"`.
+    ///
+    /// Range: `"interpolated"` or `"information"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub posterior: Option<String>,
 }
 
 /// `[particle]`: the bootstrap particle filter, as many particles as grid points.
@@ -661,6 +671,11 @@ pub struct AblationsToml {
     /// processor in the loop).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub control_on_estimate: Option<AblationTargetToml>,
+    /// The MGPMF with the other `mgpmf.posterior` than the main batch's (the paper's
+    /// interpolated covariance against the information form). The method must be
+    /// `MGPMF`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub mgpmf_posterior: Option<AblationTargetToml>,
 }
 
 /// The scenario and method of an ablation.
