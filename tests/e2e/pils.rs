@@ -433,12 +433,10 @@ fn bad_settings_and_foreign_output_folder_are_refused_before_the_run() {
 }
 
 /// The acceptance run itself: the full `buildings` MGPMF flight of
-/// `scenarios/pils.toml` (55,500 steps) in lockstep as two processes equals the
-/// offline run fed the same MAVLink-quantized measurements, bit for bit. Minutes in
-/// the debug build, so ignored there; run it with
-/// `cargo test --release --test e2e pils::full -- --ignored` (docs/pils.md).
+/// `scenarios/pils.toml` (four legs, 17,446 steps, 174 s simulated) in lockstep as two
+/// processes equals the offline run fed the same MAVLink-quantized measurements, bit
+/// for bit (about 10 s with the test profile: docs/pils.md).
 #[test]
-#[ignore = "full flight: run with --release (docs/pils.md)"]
 fn full_buildings_flight_lockstep_equals_offline_quantized_run() {
     let dir = scratch("pils-full");
     let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pils.toml");
