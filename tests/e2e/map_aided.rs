@@ -102,27 +102,6 @@ fn seven_beams(offset_deg: f64) -> Vec<Vector3<f64>> {
     d
 }
 
-/// 9 fixed sky directions (azimuth, elevation deg) for the LOS satellite count.
-fn sky() -> Vec<Vector3<f64>> {
-    [
-        (10.0, 75.0),
-        (70.0, 20.0),
-        (100.0, 45.0),
-        (160.0, 30.0),
-        (200.0, 60.0),
-        (240.0, 15.0),
-        (290.0, 35.0),
-        (330.0, 50.0),
-        (30.0, 25.0),
-    ]
-    .iter()
-    .map(|&(az, el): &(f64, f64)| {
-        let (az, el) = (az.to_radians(), el.to_radians());
-        Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), -el.sin())
-    })
-    .collect()
-}
-
 /// The sensors of a run (true noise and what the filter assumes).
 #[derive(Clone)]
 struct Sensors<'a> {
@@ -296,7 +275,7 @@ fn run(chain: &Chain, s: &Sensors<'_>, spec: &RunSpec, rng: &mut ChaCha8Rng) -> 
         ))),
         _ => Nav::Plain(Box::new(filter)),
     };
-    let sky = sky();
+    let sky = fathom_sensors::gnss::fixed_sky_directions();
     let mut out = RunOut::default();
     let mut next_cp = 0;
     for k in spec.start..spec.end {
@@ -360,13 +339,7 @@ fn run(chain: &Chain, s: &Sensors<'_>, spec: &RunSpec, rng: &mut ChaCha8Rng) -> 
             }
             (Nav::Switching(sf), _) => {
                 if gps_epoch {
-                    let los = sky
-                        .iter()
-                        .filter(|d| {
-                            s.map
-                                .line_of_sight(&truth.pos_in_nav, &(truth.pos_in_nav + *d * 2e4))
-                        })
-                        .count();
+                    let los = fathom_sensors::gnss::los_count(s.map, &truth.pos_in_nav, &sky);
                     match sf.observe_los(t, los).unwrap() {
                         NavMode::GpsIns => out.gps_mode_epochs += 1,
                         NavMode::MapAided => out.map_mode_epochs += 1,

@@ -200,6 +200,33 @@ fn first_addr(nav: &mut Child) -> SocketAddr {
         .unwrap_or_else(|_| panic!("{line}"))
 }
 
+/// After 4 s of a run, kills `victim`; `survivor` must exit non-zero within `limit`
+/// with its report (`report`, written on the way out) saying `status`.
+fn kill_and_expect_exit(
+    victim: &mut Child,
+    survivor: &mut Child,
+    limit: Duration,
+    report: &Path,
+    status: &str,
+) -> serde_json::Value {
+    std::thread::sleep(Duration::from_secs(4));
+    assert!(
+        survivor.try_wait().unwrap().is_none(),
+        "the run should still be going"
+    );
+    victim.kill().unwrap();
+    let _ = victim.wait();
+    let code = wait_for(survivor, limit);
+    assert!(matches!(code, Some(c) if c != 0), "survivor: {code:?}");
+    let r = json(report);
+    assert!(
+        r["status"].as_str().unwrap().contains(status),
+        "{}",
+        r["status"]
+    );
+    r
+}
+
 /// Waits for `child` at most `limit`; its exit code (`None`: still running).
 fn wait_for(child: &mut Child, limit: Duration) -> Option<i32> {
     let t0 = Instant::now();
@@ -251,41 +278,180 @@ fn a_killed_peer_ends_the_other_side_within_the_timeout_with_outputs() {
     let mut nav = spawn_nav("nav1");
     let addr = first_addr(&mut nav);
     let mut sim = spawn_sim(addr, "sim1");
-    std::thread::sleep(Duration::from_secs(4));
-    assert!(
-        sim.try_wait().unwrap().is_none(),
-        "the run should still be going"
-    );
-    nav.kill().unwrap();
-    let _ = nav.wait();
-    let code = wait_for(&mut sim, Duration::from_secs(5));
-    assert!(matches!(code, Some(c) if c != 0), "simulator: {code:?}");
-    let report = json(&dir.join("sim1/pils.json"));
-    assert!(
-        report["status"]
-            .as_str()
-            .unwrap()
-            .contains("navigation silent"),
-        "{}",
-        report["status"]
+    let report = kill_and_expect_exit(
+        &mut nav,
+        &mut sim,
+        Duration::from_secs(5),
+        &dir.join("sim1/pils.json"),
+        "navigation silent",
     );
     assert!(report["solutions"].as_u64().unwrap() > 0);
     // Kill the simulator: the navigation exits non-zero within the timeout.
     let mut nav = spawn_nav("nav2");
     let addr = first_addr(&mut nav);
     let mut sim = spawn_sim(addr, "sim2");
-    std::thread::sleep(Duration::from_secs(4));
-    sim.kill().unwrap();
-    let _ = sim.wait();
-    let code = wait_for(&mut nav, Duration::from_secs(4));
-    assert!(matches!(code, Some(c) if c != 0), "navigation: {code:?}");
-    let report = json(&dir.join("nav2/nav.json"));
-    assert!(
-        report["status"]
-            .as_str()
-            .unwrap()
-            .contains("simulator silent"),
-        "{}",
-        report["status"]
+    kill_and_expect_exit(
+        &mut sim,
+        &mut nav,
+        Duration::from_secs(4),
+        &dir.join("nav2/nav.json"),
+        "simulator silent",
     );
+}
+
+/// `fathom pils compare`: two runs of a very short flight, each in lockstep and in
+/// real time with loss and latency; the per-run table, the paired difference with
+/// its interval and the figures are written, and the realtime sessions count their
+/// late solutions (20 ms one-way latency: every answer is later than one 10 ms step).
+#[test]
+fn compare_writes_per_run_table_and_paired_interval() {
+    let dir = scratch("pils-compare");
+    let file = settings(
+        "pacing = \"realtime\"\n[link.faults]\nloss = 0.05\nlatency_s = 0.02\njitter_s = 0.01\n",
+    )
+    .replace("side_m = 50.0", "side_m = 35.0\nheight_m = 5.0");
+    std::fs::write(dir.join("rt.toml"), file).unwrap();
+    let r = fathom(
+        &dir,
+        &["pils", "compare", "rt.toml", "--runs", "2", "--out", "cmp"],
+    );
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    assert!(
+        r.stdout.contains("realtime - lockstep (paired)"),
+        "{}",
+        r.stdout
+    );
+    let c = json(&dir.join("cmp/comparison.json"));
+    let runs = c["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 2);
+    for run in runs {
+        assert_eq!(run["lockstep_equal_offline"], true, "{run}");
+        assert!(run["realtime_late"].as_u64().unwrap() > 0, "{run}");
+        assert!(run["realtime_solutions"].as_u64().unwrap() > 0, "{run}");
+    }
+    let m = c["metrics"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|m| m["metric"] == "rmse_3d")
+        .unwrap();
+    let d = &m["difference"];
+    let mean = d["mean"].as_f64().unwrap();
+    let ci: Vec<f64> = d["ci95"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert!(ci[0] < mean && mean < ci[1], "{d}");
+    // The paired mean is the mean of the per-run differences.
+    let diff: f64 = runs
+        .iter()
+        .map(|r| {
+            r["realtime"]["rmse_3d"].as_f64().unwrap() - r["lockstep"]["rmse_3d"].as_f64().unwrap()
+        })
+        .sum::<f64>()
+        / 2.0;
+    assert!((diff - mean).abs() < 1e-12, "{diff} {mean}");
+    let summary = json(&dir.join("cmp/summary.json"));
+    assert!(
+        summary["rows"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .any(|r| r["method"] == "realtime-lockstep/MGPMF" && r["metric"] == "rmse_3d")
+    );
+    assert_eq!(
+        std::fs::read_to_string(dir.join("cmp/runs.csv"))
+            .unwrap()
+            .lines()
+            .count(),
+        3
+    );
+    for f in [
+        "report.md",
+        "rmse_3d_per_run.svg",
+        "error_3d_lockstep_vs_realtime.svg",
+        "latency_realtime.svg",
+        "run000_realtime/sim/pils.json",
+        "run001_lockstep/nav/nav.json",
+        "run000_lockstep/sim/error_3d.svg",
+        "run_info.json",
+    ] {
+        assert!(dir.join("cmp").join(f).is_file(), "{f}");
+    }
+}
+
+/// A bad settings file is one usage error before any process starts; an output
+/// folder holding a file fathom did not write is refused (exit 2) before the run,
+/// and with `--force` the file is kept.
+#[test]
+fn bad_settings_and_foreign_output_folder_are_refused_before_the_run() {
+    let dir = scratch("pils-refuse");
+    std::fs::write(
+        dir.join("bad.toml"),
+        settings("").replace("legs = 1", "legs = 7"),
+    )
+    .unwrap();
+    let r = fathom(&dir, &["pils", "bad.toml", "--out", "out"]);
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert_eq!(r.stderr.matches("legs").count(), 1, "{}", r.stderr);
+    assert!(!dir.join("out").exists());
+    std::fs::write(dir.join("pils.toml"), settings("")).unwrap();
+    std::fs::create_dir_all(dir.join("out")).unwrap();
+    std::fs::write(dir.join("out/mine.txt"), "keep").unwrap();
+    for args in [
+        &["pils", "pils.toml", "--out", "out"][..],
+        &[
+            "pils",
+            "sim",
+            "pils.toml",
+            "--nav",
+            "127.0.0.1:9",
+            "--out",
+            "out",
+        ][..],
+        &[
+            "pils",
+            "compare",
+            "pils.toml",
+            "--runs",
+            "2",
+            "--out",
+            "out",
+        ][..],
+    ] {
+        let r = fathom(&dir, args);
+        assert_eq!(r.code, 2, "{args:?}: {}", r.stderr);
+        assert!(r.stderr.contains("--out"), "{}", r.stderr);
+        assert!(!dir.join("out/sim").exists());
+    }
+    assert_eq!(
+        std::fs::read_to_string(dir.join("out/mine.txt")).unwrap(),
+        "keep"
+    );
+}
+
+/// The acceptance run itself: the full `buildings` MGPMF flight of
+/// `scenarios/pils.toml` (four legs, 17,446 steps, 174 s simulated) in lockstep as two
+/// processes equals the offline run fed the same MAVLink-quantized measurements, bit
+/// for bit (about 10 s with the test profile: docs/pils.md).
+#[test]
+fn full_buildings_flight_lockstep_equals_offline_quantized_run() {
+    let dir = scratch("pils-full");
+    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pils.toml");
+    let file = file.to_str().unwrap();
+    let r = fathom(&dir, &["pils", file, "--out", "out"]);
+    assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
+    let sim = json(&dir.join("out/sim/pils.json"));
+    assert_eq!(sim["status"], "ok");
+    assert_eq!(sim["equal_to_offline_quantized"], true);
+    assert_eq!(sim["steps_sent"], sim["steps_total"]);
+    assert!(
+        sim["steps_total"].as_u64().unwrap() > 17_000,
+        "{}",
+        sim["steps_total"]
+    );
+    let csv = std::fs::read_to_string(dir.join("out/sim/solutions.csv")).unwrap();
+    assert_eq!(csv, offline_quantized(&dir, file));
 }

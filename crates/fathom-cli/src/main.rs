@@ -66,6 +66,7 @@
 mod campaign;
 mod own_logs;
 mod pils;
+mod pils_figures;
 
 use std::io::{IsTerminal, Write as _};
 use std::path::{Path, PathBuf};

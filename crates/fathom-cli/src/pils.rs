@@ -9,10 +9,13 @@ use std::time::{Duration, Instant};
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Subcommand};
+use fathom_pils::report::SimReport;
 use fathom_pils::scenario::Method;
+use fathom_pils::session::{Prepared, Session};
 use fathom_pils::settings::{PilsFile, Settings};
+use fathom_sim::driver::{OutDir, RunInfo};
 
-use crate::Failure;
+use crate::{Failure, failure};
 
 /// `fathom pils ...`.
 #[derive(Debug, Args)]
@@ -28,6 +31,9 @@ pub struct PilsArgs {
     /// The navigation method (overrides the file's).
     #[arg(long, value_name = "NAME")]
     method: Option<String>,
+    /// Write into `--out` even if it holds files fathom did not write (they are kept).
+    #[arg(long)]
+    force: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -46,6 +52,9 @@ enum PilsSide {
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "target/pils/sim")]
         out: PathBuf,
+        /// Write into `--out` even if it holds files fathom did not write.
+        #[arg(long)]
+        force: bool,
     },
     /// The navigation process: runs `--method` on what arrives at `--listen`.
     Nav {
@@ -63,6 +72,9 @@ enum PilsSide {
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "target/pils/nav")]
         out: PathBuf,
+        /// Write into `--out` even if it holds files fathom did not write.
+        #[arg(long)]
+        force: bool,
     },
     /// The offline run of the same settings, in-process: its solutions as CSV.
     Offline {
@@ -78,6 +90,25 @@ enum PilsSide {
         #[arg(long, value_name = "FILE")]
         out: PathBuf,
     },
+    /// Realtime vs lockstep over `--runs` runs: both processes per session, each run
+    /// flown in lockstep (clean link) and in real time (the file's faults); per-run
+    /// errors and the paired difference with 95 % CIs (docs/pils.md).
+    Compare {
+        /// Settings file.
+        scenario: PathBuf,
+        /// Runs (run indices `run`, `run + 1`, ...; at least 2).
+        #[arg(long, value_name = "N", default_value_t = 10)]
+        runs: usize,
+        /// The method (overrides the file's).
+        #[arg(long, value_name = "NAME")]
+        method: Option<String>,
+        /// Output folder.
+        #[arg(long, value_name = "DIR", default_value = "target/pils-compare")]
+        out: PathBuf,
+        /// Write into `--out` even if it holds files fathom did not write.
+        #[arg(long)]
+        force: bool,
+    },
 }
 
 fn load(path: &Path, method: Option<&str>) -> Result<Settings, Failure> {
@@ -92,26 +123,68 @@ fn load(path: &Path, method: Option<&str>) -> Result<Settings, Failure> {
                 "--method {m}: must be INS-only, GPS/INS, GREKF or MGPMF"
             ))
         })?;
+        s.file.method = s.method.name().into();
     }
     Ok(s)
+}
+
+/// Checks the flight settings and flies the run before any socket, process or
+/// output folder is touched: a bad file is one usage error (exit 2).
+pub(crate) fn prepare(s: &Settings, path: &Path) -> Result<Prepared, Failure> {
+    Prepared::new(s).map_err(|e| Failure::Usage(anyhow!("{}: {e}", path.display())))
 }
 
 fn run_err(e: impl std::fmt::Display) -> Failure {
     Failure::Run(anyhow!("{e}"))
 }
 
-/// Writes a session's files into `out` (whatever ended it), then returns its
-/// report or its error.
-fn finish<R>(s: fathom_pils::session::Session<R>, out: &Path) -> Result<R, Failure> {
-    std::fs::create_dir_all(out)
-        .with_context(|| format!("creating {}", out.display()))
+/// Claims an output folder (lock, ownership, writability) before any work.
+pub(crate) fn claim(out: &Path, force: bool) -> Result<OutDir, Failure> {
+    OutDir::claim(out, force).map_err(failure)
+}
+
+/// Moves a claimed folder into place with its `run_info.json`.
+pub(crate) fn commit(
+    claim: OutDir,
+    scenario: &Path,
+    s: &Settings,
+    runs: Option<usize>,
+    t0: Instant,
+) -> Result<(), Failure> {
+    let info = RunInfo {
+        fathom_version: env!("CARGO_PKG_VERSION").into(),
+        command: "pils".into(),
+        experiment: "pils".into(),
+        scenario: scenario.display().to_string(),
+        runs,
+        threads: None,
+        seed: None,
+        base_seed: Some(s.file.seed),
+        elapsed_s: t0.elapsed().as_secs_f64(),
+        files: Vec::new(),
+    };
+    claim.commit(info).map(drop).map_err(failure)
+}
+
+/// Writes a session's files into `dir` (whatever ended it).
+fn write_files<R>(s: &Session<R>, dir: &Path) -> Result<(), Failure> {
+    std::fs::create_dir_all(dir)
+        .with_context(|| format!("creating {}", dir.display()))
         .map_err(Failure::Run)?;
     for (name, text) in &s.files {
-        let p = out.join(name);
+        let p = dir.join(name);
         std::fs::write(&p, text)
             .with_context(|| format!("writing {}", p.display()))
             .map_err(Failure::Run)?;
     }
+    if let Some(series) = &s.series {
+        crate::pils_figures::session_figures(series, dir)?;
+    }
+    Ok(())
+}
+
+/// The session's error, naming where its record is.
+fn session_result<R>(s: Session<R>, out: &Path) -> Result<R, Failure> {
     match s.error {
         Some(e) => Err(Failure::Run(anyhow!(
             "{e} (what was recorded is in {})",
@@ -123,19 +196,26 @@ fn finish<R>(s: fathom_pils::session::Session<R>, out: &Path) -> Result<R, Failu
 
 /// Runs a `fathom pils` command.
 pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
+    let t0 = Instant::now();
     match &a.side {
         Some(PilsSide::Sim {
             scenario,
             nav,
             bind,
             out,
+            force,
         }) => {
             let s = load(scenario, None)?;
+            let p = prepare(&s, scenario)?;
+            let dir = claim(out, *force)?;
             let mut link = fathom_pils::session::bind_sim(&s, *bind, *nav).map_err(run_err)?;
             let addr = link.local_addr().map_err(run_err)?;
             eprintln!("simulator on {addr}, sending to {nav}");
-            let r = fathom_pils::session::simulate_on(&mut link, &s, true).map_err(run_err)?;
-            finish(r, out).map(|r| sim_text(&r, out))
+            let r = fathom_pils::session::simulate_prepared(&mut link, &s, &p, true)
+                .map_err(run_err)?;
+            write_files(&r, dir.dir())?;
+            commit(dir, scenario, &s, None, t0)?;
+            session_result(r, out).map(|r| sim_text(&r, out))
         }
         Some(PilsSide::Nav {
             scenario,
@@ -143,14 +223,21 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
             sim,
             method,
             out,
+            force,
         }) => {
             let s = load(scenario, method.as_deref())?;
+            // The navigation's own world (fails on the settings the simulator checks).
+            fathom_pils::scenario::Shared::new(s.file.flight.clone())
+                .map_err(|e| Failure::Usage(anyhow!("{}: {e}", scenario.display())))?;
+            let dir = claim(out, *force)?;
             let mut link = fathom_pils::session::bind_nav(&s, *listen, *sim).map_err(run_err)?;
             let addr = link.local_addr().map_err(run_err)?;
             // The first line tells a parent where to send (flushed before serving).
             println!("navigation listening on {addr}");
             let r = fathom_pils::session::navigate_on(&mut link, &s, s.method).map_err(run_err)?;
-            finish(r, out).map(|r| {
+            write_files(&r, dir.dir())?;
+            commit(dir, scenario, &s, None, t0)?;
+            session_result(r, out).map(|r| {
                 format!(
                     "navigation done: {} steps, {} solutions; outputs in {}\n",
                     r.steps,
@@ -173,18 +260,38 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
                 .map_err(Failure::Run)?;
             Ok(format!("offline solutions in {}\n", out.display()))
         }
+        Some(PilsSide::Compare {
+            scenario,
+            runs,
+            method,
+            out,
+            force,
+        }) => {
+            let s = load(scenario, method.as_deref())?;
+            crate::pils_figures::compare(scenario, &s, *runs, out, *force)
+        }
         None => {
             let scenario = a.scenario.as_ref().ok_or_else(|| {
                 Failure::Usage(anyhow!(
-                    "fathom pils: give a settings file, or `sim` / `nav` / `offline`"
+                    "fathom pils: give a settings file, or `sim` / `nav` / `offline` / `compare`"
                 ))
             })?;
-            both(scenario, a.method.as_deref(), &a.out)
+            let s = load(scenario, a.method.as_deref())?;
+            let p = prepare(&s, scenario)?;
+            let dir = claim(&a.out, a.force)?;
+            let (r, addrs) = both(scenario, &s, &p, dir.dir());
+            // What was recorded is kept whatever ended the session.
+            commit(dir, scenario, &s, None, t0)?;
+            let r = r?;
+            Ok(format!(
+                "{addrs}\n{}",
+                sim_text(&session_result(r, &a.out.join("sim"))?, &a.out.join("sim"))
+            ))
         }
     }
 }
 
-fn sim_text(r: &fathom_pils::report::SimReport, out: &Path) -> String {
+fn sim_text(r: &SimReport, out: &Path) -> String {
     let mut t = format!(
         "{} {}: {} of {} steps, {} solutions ({} late), real-time factor {:.1}\n",
         r.pacing,
@@ -216,10 +323,28 @@ fn sim_text(r: &fathom_pils::report::SimReport, out: &Path) -> String {
     t
 }
 
-/// Both processes: the navigation as a child on an ephemeral loopback port, the
-/// simulator here.
-fn both(scenario: &Path, method: Option<&str>, out: &Path) -> Result<String, Failure> {
-    let s = load(scenario, method)?;
+/// Both processes of one session: the navigation as a child on an ephemeral
+/// loopback port (settings file `scenario`, outputs in `dir/nav`), the simulator
+/// here (outputs in `dir/sim`, written whatever ended the session). Returns the
+/// simulator's session (or the failure) and the addresses line.
+pub(crate) fn both(
+    scenario: &Path,
+    s: &Settings,
+    p: &Prepared,
+    dir: &Path,
+) -> (Result<Session<SimReport>, Failure>, String) {
+    let mut addrs = String::new();
+    let r = both_inner(scenario, s, p, dir, &mut addrs);
+    (r, addrs)
+}
+
+fn both_inner(
+    scenario: &Path,
+    s: &Settings,
+    p: &Prepared,
+    dir: &Path,
+    addrs: &mut String,
+) -> Result<Session<SimReport>, Failure> {
     let exe = std::env::current_exe()
         .context("own executable")
         .map_err(Failure::Run)?;
@@ -242,7 +367,7 @@ fn both(scenario: &Path, method: Option<&str>, out: &Path) -> Result<String, Fai
             s.method.name(),
             "--out",
         ])
-        .arg(out.join("nav"))
+        .arg(dir.join("nav"))
         .stdout(Stdio::piped())
         .spawn()
         .context("starting the navigation process")
@@ -253,20 +378,23 @@ fn both(scenario: &Path, method: Option<&str>, out: &Path) -> Result<String, Fai
         .ok_or_else(|| Failure::Run(anyhow!("no stdout of the navigation")))?;
     let mut lines = BufReader::new(stdout).lines();
     let first = lines.next().and_then(Result::ok).unwrap_or_default();
-    let nav_addr: SocketAddr = first
+    let Some(nav_addr) = first
         .rsplit(' ')
         .next()
-        .and_then(|a| a.parse().ok())
-        .ok_or_else(|| {
-            Failure::Run(anyhow!(
-                "the navigation did not say where it listens: {first:?}"
-            ))
-        })?;
+        .and_then(|a| a.parse::<SocketAddr>().ok())
+    else {
+        let _ = child.kill();
+        let _ = child.wait();
+        return Err(Failure::Run(anyhow!(
+            "the navigation did not say where it listens: {first:?}"
+        )));
+    };
     eprintln!(
         "simulator on {sim_addr}, navigation (pid {}) on {nav_addr}",
         child.id()
     );
-    let mut link = fathom_pils::link::Link::from_socket(
+    *addrs = format!("simulator on {sim_addr}, navigation on {nav_addr}");
+    let r = fathom_pils::link::Link::from_socket(
         sock,
         fathom_pils::link::Peer::Fixed(nav_addr),
         fathom_pils::link::LinkSetup {
@@ -277,9 +405,8 @@ fn both(scenario: &Path, method: Option<&str>, out: &Path) -> Result<String, Fai
             fault_seed: s.file.seed ^ 0x5111_0001 ^ s.file.run.rotate_left(17),
         },
     )
-    .map_err(run_err)?;
-    let sim_out = out.join("sim");
-    let r = fathom_pils::session::simulate_on(&mut link, &s, true).map_err(run_err);
+    .and_then(|mut link| fathom_pils::session::simulate_prepared(&mut link, s, p, true))
+    .map_err(run_err);
     // The child ends on the power-off heartbeat or its own timeout.
     let deadline = Instant::now() + Duration::from_secs_f64(s.file.link.timeout_s + 2.0);
     let status = loop {
@@ -292,14 +419,12 @@ fn both(scenario: &Path, method: Option<&str>, out: &Path) -> Result<String, Fai
             }
         }
     };
-    let r = r.and_then(|r| finish(r, &sim_out))?;
-    if !status.is_some_and(|s| s.success()) {
+    let r = r?;
+    write_files(&r, &dir.join("sim"))?;
+    if r.error.is_none() && !status.is_some_and(|s| s.success()) {
         return Err(Failure::Run(anyhow!(
             "the navigation process ended with {status:?}"
         )));
     }
-    Ok(format!(
-        "simulator on {sim_addr}, navigation on {nav_addr}\n{}",
-        sim_text(&r, &sim_out)
-    ))
+    Ok(r)
 }

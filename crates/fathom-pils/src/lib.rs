@@ -17,9 +17,11 @@
 //! | [`scenario`] | the flight, sensors and navigation a PILS run uses |
 //! | [`sim`], [`nav`] | the two processes' loops |
 //! | [`report`] | the outputs |
+//! | [`compare`] | lockstep vs realtime over runs: paired differences with CIs |
 
 pub mod assemble;
 pub mod codec;
+pub mod compare;
 pub mod epoch;
 pub mod faults;
 pub mod frame;

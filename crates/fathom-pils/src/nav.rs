@@ -115,6 +115,8 @@ fn serve(
     let mut prev_usec = 0u64;
     let mut last_answer: Option<(u64, MavMessage)> = None;
     let mut last_heard = Instant::now();
+    let mut started = false;
+    let mut pending_init = None;
     loop {
         let Some(m) = link.recv(last_heard + timeout)? else {
             return Err(PilsError::PeerSilent {
@@ -133,6 +135,17 @@ fn serve(
             continue;
         }
         let name = crate::frame::name_of(&m);
+        // Real time: the initial estimate is repeated by the simulator until the
+        // navigation has started; it is kept apart from the steps (whose order jitter
+        // scrambles) and used at the first step processed from the start step on.
+        if !lockstep && let MavMessage::ODOMETRY(d) = &m {
+            match crate::codec::decode_initial(d, 0) {
+                Some(i) if !started => pending_init = Some(i),
+                Some(_) => link.counters.count_rejected(name, Drop::Stale),
+                None => link.counters.count_rejected(name, Drop::BadContent),
+            }
+            continue;
+        }
         let Some(k) = stamp_step(&m) else {
             link.counters.count_rejected(name, Drop::UnexpectedType);
             continue;
@@ -186,7 +199,13 @@ fn serve(
             if !p.complete(&sh.due(k)) {
                 out.incomplete_steps += 1;
             }
-            let init = p.init;
+            let init = if lockstep {
+                p.init
+            } else if !started && k >= sh.start {
+                pending_init.take()
+            } else {
+                None
+            };
             let Some(imu) = p.imu else {
                 break;
             };
@@ -201,6 +220,7 @@ fn serve(
             link.send(&a)?;
             last_answer = Some((k, a));
             if let Some(sol) = sol {
+                started = true;
                 out.solutions.insert(k, sol);
             }
             next = k + 1;

@@ -99,6 +99,16 @@ pub fn evaluate(src: &dyn SensorSource, sols: &BTreeMap<u64, Solution>) -> Error
     }
 }
 
+/// The 3-D position error of each solution against the truth, `(time s, error m)`.
+pub fn error_3d_series(src: &dyn SensorSource, sols: &BTreeMap<u64, Solution>) -> Vec<(f64, f64)> {
+    sols.iter()
+        .map(|(&k, sol)| {
+            let t = src.truth(k);
+            (t.time, (sol.pos_in_nav - t.pos_in_nav).norm())
+        })
+        .collect()
+}
+
 /// Runs `method` offline on the simulated run: with `quantized`, every measurement,
 /// the initial estimate and every solution go through the MAVLink encode / decode
 /// functions (what the lockstep PILS run sees); without, the `f64` values.
@@ -147,7 +157,8 @@ pub struct SimReport {
     pub steps_total: u64,
     /// Solutions received (distinct steps).
     pub solutions: usize,
-    /// Solutions that arrived after the next step was due (realtime).
+    /// Answers (`ODOMETRY`, also the `quality = -1` ones before the navigation
+    /// started) that arrived more than one step after their step was sent (realtime).
     pub late_solutions: u64,
     /// Steps resent (lockstep retransmissions).
     pub retransmissions: u64,

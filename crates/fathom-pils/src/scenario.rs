@@ -12,7 +12,7 @@
 //! When the `urban` experiment's run is available its scenario replaces this one
 //! behind the same traits.
 
-use fathom_core::{Material, RayCaster};
+use fathom_core::Material;
 use fathom_estimators::map_aided::{
     BaroHeight, ErrorVector12, GpsFix, GpsParams, Grekf, Ins12Filter, Ins12Params, MapAider,
     Matrix12, Mgpmf, MgpmfParams, ModeSwitch, NavMode, NominalNav, RangeBeam, RangeParams,
@@ -299,27 +299,6 @@ impl Shared {
     }
 }
 
-/// Nine fixed sky directions (azimuth, elevation deg) for the LOS count.
-fn sky() -> Vec<Vector3<f64>> {
-    [
-        (10.0, 75.0),
-        (70.0, 20.0),
-        (100.0, 45.0),
-        (160.0, 30.0),
-        (200.0, 60.0),
-        (240.0, 15.0),
-        (290.0, 35.0),
-        (330.0, 50.0),
-        (30.0, 25.0),
-    ]
-    .iter()
-    .map(|&(az, el): &(f64, f64)| {
-        let (az, el) = (az.to_radians(), el.to_radians());
-        Vector3::new(el.cos() * az.cos(), el.cos() * az.sin(), -el.sin())
-    })
-    .collect()
-}
-
 /// The simulated run (truth, epochs, initial estimate).
 pub struct SimulatedRun {
     truth: Vec<LocalTruthSample>,
@@ -378,7 +357,7 @@ impl SimulatedRun {
             .check()
             .map_err(|e| model("IMU")(e.to_string()))?;
         let mut errors: ImuErrors = allan.error_spec().draw(&mut imu_rng);
-        let sky = sky();
+        let sky = fathom_sensors::gnss::fixed_sky_directions();
         let mut epochs = Vec::with_capacity(truth.len());
         for (k, t) in truth.iter().enumerate() {
             let Some(inc) = inverter.push(t).map_err(|e| model("IMU")(e.to_string()))? else {
@@ -391,13 +370,7 @@ impl SimulatedRun {
             let due = sh.due(k);
             let mut gps = Vec::new();
             if due.gps > 0 {
-                let los = sky
-                    .iter()
-                    .filter(|d| {
-                        sh.map
-                            .line_of_sight(&t.pos_in_nav, &(t.pos_in_nav + *d * 2e4))
-                    })
-                    .count();
+                let los = fathom_sensors::gnss::los_count(&sh.map, &t.pos_in_nav, &sky);
                 let noise = Vector3::from_fn(|_, _| p.gps_sigma_m * rng_normal(&mut gps_rng));
                 gps.push(GpsReading {
                     id: 0,

@@ -11,7 +11,7 @@ use serde::Serialize;
 use crate::PilsError;
 use crate::link::Link;
 use crate::nav::{nav_link, run_nav};
-use crate::report::{SimReport, evaluate, offline, sim_files, solutions_csv};
+use crate::report::{SimReport, error_3d_series, evaluate, offline, sim_files, solutions_csv};
 use crate::scenario::{IMU_DT, MapAidedNav, Method, Shared, SimulatedRun};
 use crate::settings::{Pacing, Settings};
 use crate::sim::{latency_summary, run_sim, sim_link};
@@ -26,6 +26,39 @@ pub struct Session<R> {
     pub files: Vec<(&'static str, String)>,
     /// The error that ended the session (peer silent, socket, navigation), if any.
     pub error: Option<PilsError>,
+    /// Per-step data for figures (the simulator side only).
+    pub series: Option<SimSeries>,
+}
+
+/// Per-step data of a simulator session, for figures.
+#[derive(Debug, Clone, Default)]
+pub struct SimSeries {
+    /// 3-D position error vs time, `(time s, error m)`, per solution set:
+    /// `("PILS", ..)`, then, when they were run, the two offline references.
+    pub error_3d: Vec<(&'static str, Vec<(f64, f64)>)>,
+    /// Solution latencies (send of a step -> receipt of its solution), s.
+    pub latencies_s: Vec<f64>,
+}
+
+/// The run of a session, checked and flown before any socket or process is used:
+/// a bad setting is reported once, before the navigation side is started.
+pub struct Prepared {
+    /// The world and schedule.
+    pub shared: Shared,
+    /// The flight and its sensor epochs.
+    pub run: SimulatedRun,
+}
+
+impl Prepared {
+    /// Checks the flight settings, builds the world and flies the run.
+    ///
+    /// # Errors
+    /// [`PilsError::Setting`] / [`PilsError::Model`] naming what is wrong.
+    pub fn new(s: &Settings) -> Result<Self, PilsError> {
+        let shared = Shared::new(s.file.flight.clone())?;
+        let run = SimulatedRun::new(&shared, s.file.seed, s.file.run)?;
+        Ok(Self { shared, run })
+    }
 }
 
 /// The simulator side on a bound link (`offline_refs`: also run the two offline
@@ -39,17 +72,40 @@ pub fn simulate_on(
     s: &Settings,
     offline_refs: bool,
 ) -> Result<Session<SimReport>, PilsError> {
-    let sh = Shared::new(s.file.flight.clone())?;
-    let run = SimulatedRun::new(&sh, s.file.seed, s.file.run)?;
-    let o = run_sim(link, &sh, &run, s);
-    let pils = (!o.solutions.is_empty()).then(|| evaluate(&run, &o.solutions));
+    let p = Prepared::new(s)?;
+    simulate_prepared(link, s, &p, offline_refs)
+}
+
+/// [`simulate_on`] with the run already prepared.
+///
+/// # Errors
+/// As [`simulate_on`].
+pub fn simulate_prepared(
+    link: &mut Link,
+    s: &Settings,
+    p: &Prepared,
+    offline_refs: bool,
+) -> Result<Session<SimReport>, PilsError> {
+    let (sh, run) = (&p.shared, &p.run);
+    let o = run_sim(link, sh, run, s);
+    let mut series = SimSeries {
+        error_3d: vec![("PILS", error_3d_series(run, &o.solutions))],
+        latencies_s: o.latencies.clone(),
+    };
+    let pils = (!o.solutions.is_empty()).then(|| evaluate(run, &o.solutions));
     let (mut oq, mut of, mut equal, mut diff) = (None, None, None, Default::default());
     // A failed session is not compared (and ends quickly: within the timeout).
     if offline_refs && o.error.is_none() {
-        let q = offline(&sh, &run, s.method, true)?;
-        let f = offline(&sh, &run, s.method, false)?;
-        oq = Some(evaluate(&run, &q));
-        let fs = evaluate(&run, &f);
+        let q = offline(sh, run, s.method, true)?;
+        let f = offline(sh, run, s.method, false)?;
+        oq = Some(evaluate(run, &q));
+        let fs = evaluate(run, &f);
+        series
+            .error_3d
+            .push(("offline, MAVLink-quantized", error_3d_series(run, &q)));
+        series
+            .error_3d
+            .push(("offline, f64", error_3d_series(run, &f)));
         of = Some(fs);
         if let Some(p) = &pils {
             diff = p
@@ -73,7 +129,7 @@ pub fn simulate_on(
             Pacing::Realtime => "realtime".into(),
         },
         steps_sent: o.steps_sent,
-        steps_total: (run_steps(&run)).saturating_sub(1),
+        steps_total: (run_steps(run)).saturating_sub(1),
         solutions: o.solutions.len(),
         late_solutions: o.late,
         retransmissions: o.retransmissions,
@@ -97,6 +153,7 @@ pub fn simulate_on(
         report,
         files,
         error: o.error,
+        series: Some(series),
     })
 }
 
@@ -166,6 +223,7 @@ pub fn navigate_on(
         report: r,
         files,
         error: o.error,
+        series: None,
     })
 }
 

@@ -1,6 +1,7 @@
 //! The simulator process: sends each step's messages to the navigation, in lockstep
 //! (waits for the step's `ODOMETRY`, resends the step after `retransmit_s`) or paced
-//! to the wall clock (late solutions counted, not waited for), compares the
+//! to the wall clock (late solutions counted, not waited for; the initial estimate
+//! repeated until the navigation has started), compares the
 //! solutions with the truth, and ends with `HEARTBEAT(MAV_STATE_POWEROFF)`. Silence
 //! of the navigation longer than the timeout ends the session with an error; what
 //! was recorded so far is returned either way.
@@ -224,6 +225,12 @@ fn realtime(
                 timeout_s: s.file.link.timeout_s,
                 step: k,
             });
+        }
+        // The initial estimate goes out with every step from the start on until a
+        // solution shows that the navigation has started (a lost or late one would
+        // otherwise keep it from ever starting).
+        if k > sh.start && out.solutions.is_empty() {
+            link.send(&MavMessage::ODOMETRY(encode_initial(src.initial())))?;
         }
         for m in step_messages(sh, src, k) {
             link.send(&m)?;

@@ -1,0 +1,263 @@
+//! The realtime degradation study: the same runs (seed, run index) flown in lockstep
+//! and in real time, the per-run errors side by side and, per metric, the mean of
+//! each pacing and the paired difference realtime - lockstep with 95 % Student-t
+//! intervals over the runs (`fathom_stats::paired_mean_ci`: the two pacings of a run
+//! share its flight, sensors and initial error, so the pairs remove that spread).
+
+use fathom_stats::{MeanCi, mean_ci, paired_mean_ci};
+use serde::Serialize;
+
+use crate::PilsError;
+use crate::report::ErrorStats;
+
+/// One run flown both ways.
+#[derive(Debug, Clone, Serialize)]
+pub struct RunPair {
+    /// Run index (the settings' `run` plus the pair's number).
+    pub run: u64,
+    /// Errors of the lockstep session.
+    pub lockstep: ErrorStats,
+    /// Errors of the realtime session (its solutions that arrived).
+    pub realtime: ErrorStats,
+    /// Whether the lockstep solutions equal the offline MAVLink-quantized run.
+    pub lockstep_equal_offline: bool,
+    /// Steps of the run.
+    pub steps: u64,
+    /// Solutions that arrived in real time.
+    pub realtime_solutions: usize,
+    /// Answers received in real time (solutions, and `quality = -1` answers before
+    /// the navigation started; duplicates of a step each).
+    pub realtime_answers: usize,
+    /// Of the answers, late ones (more than one step after their step was sent).
+    pub realtime_late: u64,
+    /// Realtime solution latency, median and 95th percentile, ms.
+    pub realtime_latency_ms: [f64; 2],
+}
+
+/// One metric over the runs.
+#[derive(Debug, Clone, Serialize)]
+pub struct MetricCi {
+    /// Metric name (`ErrorStats::metrics`).
+    pub metric: &'static str,
+    /// Lockstep mean and 95 % CI.
+    pub lockstep: MeanCi,
+    /// Realtime mean and 95 % CI.
+    pub realtime: MeanCi,
+    /// Paired difference realtime - lockstep, mean and 95 % CI.
+    pub difference: MeanCi,
+}
+
+/// The study's result.
+#[derive(Debug, Clone, Serialize)]
+pub struct Comparison {
+    /// Per run.
+    pub runs: Vec<RunPair>,
+    /// Per metric.
+    pub metrics: Vec<MetricCi>,
+    /// Late answers over all realtime answers (pooled).
+    pub late_fraction: f64,
+    /// Realtime solutions over steps (pooled).
+    pub solution_fraction: f64,
+}
+
+impl Comparison {
+    /// Aggregates the runs (at least 2, for an interval).
+    ///
+    /// # Errors
+    /// [`PilsError::Setting`] for fewer than 2 runs; [`PilsError::Model`] when a
+    /// statistic is not finite (a run without solutions).
+    pub fn new(runs: Vec<RunPair>) -> Result<Self, PilsError> {
+        if runs.len() < 2 {
+            return Err(PilsError::setting(
+                "runs",
+                runs.len(),
+                "must be >= 2 (a confidence interval needs a spread)",
+            ));
+        }
+        let names = runs[0].lockstep.metrics().map(|(n, _)| n);
+        let mut metrics = Vec::with_capacity(names.len());
+        for (i, name) in names.into_iter().enumerate() {
+            let l: Vec<f64> = runs.iter().map(|r| r.lockstep.metrics()[i].1).collect();
+            let rt: Vec<f64> = runs.iter().map(|r| r.realtime.metrics()[i].1).collect();
+            let err = |e: fathom_stats::StatsError| PilsError::model(name, e);
+            metrics.push(MetricCi {
+                metric: name,
+                lockstep: mean_ci(&l).map_err(err)?,
+                realtime: mean_ci(&rt).map_err(err)?,
+                difference: paired_mean_ci(&rt, &l).map_err(err)?,
+            });
+        }
+        let sols: usize = runs.iter().map(|r| r.realtime_solutions).sum();
+        let answers: usize = runs.iter().map(|r| r.realtime_answers).sum();
+        let late: u64 = runs.iter().map(|r| r.realtime_late).sum();
+        let steps: u64 = runs.iter().map(|r| r.steps).sum();
+        Ok(Self {
+            late_fraction: late as f64 / answers.max(1) as f64,
+            solution_fraction: sols as f64 / steps.max(1) as f64,
+            runs,
+            metrics,
+        })
+    }
+
+    /// The per-run table as CSV.
+    pub fn runs_csv(&self) -> String {
+        let mut s = String::from(
+            "run,steps,realtime_solutions,realtime_answers,realtime_late,latency_p50_ms,\
+             latency_p95_ms,lockstep_equal_offline",
+        );
+        let names = self.runs[0].lockstep.metrics().map(|(n, _)| n);
+        for p in ["lockstep", "realtime"] {
+            for n in names {
+                s += &format!(",{p}_{n}");
+            }
+        }
+        s.push('\n');
+        for r in &self.runs {
+            s += &format!(
+                "{},{},{},{},{},{},{},{}",
+                r.run,
+                r.steps,
+                r.realtime_solutions,
+                r.realtime_answers,
+                r.realtime_late,
+                r.realtime_latency_ms[0],
+                r.realtime_latency_ms[1],
+                r.lockstep_equal_offline
+            );
+            for st in [&r.lockstep, &r.realtime] {
+                for (_, v) in st.metrics() {
+                    s += &format!(",{v}");
+                }
+            }
+            s.push('\n');
+        }
+        s
+    }
+
+    /// The report: per-run table and per-metric intervals, Markdown.
+    pub fn markdown(&self, title: &str) -> String {
+        let mut s = format!("# {title}\n\n## Per run\n\n");
+        s += "| run | steps | realtime solutions | late answers | latency p50 / p95 (ms) | \
+              rmse_3d lockstep (m) | rmse_3d realtime (m) | difference (m) |\n\
+              | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+        for r in &self.runs {
+            s += &format!(
+                "| {} | {} | {} | {} | {:.1} / {:.1} | {:.3} | {:.3} | {:+.3} |\n",
+                r.run,
+                r.steps,
+                r.realtime_solutions,
+                r.realtime_late,
+                r.realtime_latency_ms[0],
+                r.realtime_latency_ms[1],
+                r.lockstep.rmse_3d,
+                r.realtime.rmse_3d,
+                r.realtime.rmse_3d - r.lockstep.rmse_3d
+            );
+        }
+        s += &format!(
+            "\n## Over {} runs (mean [95 % CI], Student t)\n\n\
+             | metric | lockstep | realtime | realtime - lockstep (paired) |\n\
+             | --- | --- | --- | --- |\n",
+            self.runs.len()
+        );
+        let fmt = |m: &MeanCi| {
+            let [lo, hi] = m.bounds();
+            format!("{:.3} [{lo:.3}, {hi:.3}]", m.mean)
+        };
+        for m in &self.metrics {
+            s += &format!(
+                "| {} ({}) | {} | {} | {} |\n",
+                m.metric,
+                unit(m.metric),
+                fmt(&m.lockstep),
+                fmt(&m.realtime),
+                fmt(&m.difference)
+            );
+        }
+        s += &format!(
+            "\nRealtime: {:.1} % of the steps got a solution back; {:.1} % of the answers \
+             arrived late (more than one 10 ms step after their step was sent).\n",
+            100.0 * self.solution_fraction,
+            100.0 * self.late_fraction
+        );
+        s
+    }
+}
+
+/// The unit of a metric of [`ErrorStats::metrics`].
+pub fn unit(metric: &str) -> &'static str {
+    match metric {
+        "rmse_vel" => "m/s",
+        "rmse_roll" | "rmse_pitch" | "rmse_yaw" => "deg",
+        "time_map_aided_s" => "s",
+        _ => "m",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stats(rmse_3d: f64) -> ErrorStats {
+        ErrorStats {
+            samples: 10,
+            rmse_h: rmse_3d,
+            rmse_3d,
+            rmse_vel: 0.1,
+            rmse_roll: 0.1,
+            rmse_pitch: 0.1,
+            rmse_yaw: 1.0,
+            mean_3d: rmse_3d,
+            p95_3d: rmse_3d,
+            time_map_aided_s: 0.0,
+        }
+    }
+
+    fn pair(run: u64, l: f64, r: f64) -> RunPair {
+        RunPair {
+            run,
+            lockstep: stats(l),
+            realtime: stats(r),
+            lockstep_equal_offline: true,
+            steps: 100,
+            realtime_solutions: 90,
+            realtime_answers: 90,
+            realtime_late: 9,
+            realtime_latency_ms: [20.0, 40.0],
+        }
+    }
+
+    /// The paired difference is the t-interval of the per-run differences: with
+    /// differences 0.1, 0.2, 0.3 the mean is 0.2 and the half width is
+    /// t(0.975, 2) * 0.1 / sqrt(3) = 4.302653 * 0.057735 = 0.248414.
+    #[test]
+    fn paired_difference_interval() {
+        let c = Comparison::new(vec![
+            pair(0, 1.0, 1.1),
+            pair(1, 2.0, 2.2),
+            pair(2, 3.0, 3.3),
+        ])
+        .unwrap();
+        let m = c.metrics.iter().find(|m| m.metric == "rmse_3d").unwrap();
+        assert!((m.difference.mean - 0.2).abs() < 1e-12);
+        let [lo, hi] = m.difference.ci95.unwrap();
+        assert!((hi - 0.2 - 0.248_414).abs() < 1e-5, "{hi}");
+        assert!((0.2 - lo - 0.248_414).abs() < 1e-5, "{lo}");
+        // Unpaired, the spread of the runs (1, 2, 3) swamps the difference.
+        let [llo, lhi] = m.lockstep.ci95.unwrap();
+        assert!(lhi - llo > 10.0 * (hi - lo));
+        assert!((c.late_fraction - 0.1).abs() < 1e-12);
+        assert!((c.solution_fraction - 0.9).abs() < 1e-12);
+        let md = c.markdown("t");
+        assert!(md.contains("| rmse_3d (m) | 2.000 ["), "{md}");
+        assert_eq!(c.runs_csv().lines().count(), 4);
+    }
+
+    #[test]
+    fn one_run_or_no_solutions_is_refused() {
+        assert!(Comparison::new(vec![pair(0, 1.0, 1.1)]).is_err());
+        let mut p = pair(1, 1.0, f64::NAN);
+        p.realtime.rmse_3d = f64::NAN;
+        assert!(Comparison::new(vec![pair(0, 1.0, 1.1), p]).is_err());
+    }
+}
