@@ -13,7 +13,7 @@ use crate::error::SimError;
 pub struct LinePlot {
     /// Figure title.
     pub title: String,
-    /// x-axis label (with unit, e.g. `"time [s]"`).
+    /// x-axis label (unit in parentheses, e.g. `"time (s)"`).
     pub x_label: String,
     /// y-axis label (with unit).
     pub y_label: String,
@@ -21,6 +21,8 @@ pub struct LinePlot {
     pub series: Vec<Series>,
     /// Shaded x-intervals `(from, to)` drawn behind the series.
     pub shaded_x: Vec<(f64, f64)>,
+    /// What the shaded intervals mean: their legend entry (e.g. `"DVL invalid"`).
+    pub shaded_label: String,
     /// x positions of vertical marker lines.
     pub markers_x: Vec<f64>,
     /// Fixed y range `(lo, hi)`; `None` fits the data.
@@ -44,6 +46,7 @@ impl LinePlot {
             y_label: y_label.into(),
             series: Vec::new(),
             shaded_x: Vec::new(),
+            shaded_label: "shaded: see caption".to_string(),
             markers_x: Vec::new(),
             y_range: None,
             x_range: None,
@@ -60,6 +63,12 @@ impl LinePlot {
     /// Add a shaded x-interval.
     pub fn with_shade(mut self, from: f64, to: f64) -> Self {
         self.shaded_x.push((from, to));
+        self
+    }
+
+    /// Name the shaded intervals in the legend.
+    pub fn with_shade_label(mut self, label: impl Into<String>) -> Self {
+        self.shaded_label = label.into();
         self
     }
 
@@ -102,10 +111,31 @@ impl LinePlot {
                 }
             }
         };
+        let labels = legend_labels(&self.series, (y1 - y0) * 2.0 / f64::from(self.size.1));
+        let mut entries: Vec<Entry> = labels
+            .iter()
+            .enumerate()
+            .map(|(k, (l, on))| Entry {
+                label: l.clone(),
+                color: Some(series_color(k)),
+                dashed: *on,
+            })
+            .collect();
+        if !self.shaded_x.is_empty() {
+            entries.push(Entry {
+                label: self.shaded_label.clone(),
+                color: None,
+                dashed: false,
+            });
+        }
         render(path, self.size, |root| {
-            let mut chart = ChartBuilder::on(root)
-                .caption(&self.title, title_style(22))
+            let root = root.titled(&self.title, title_style(22)).map_err(de)?;
+            // The legend in its own column right of the plot: it never covers data.
+            let (plot_area, legend_area) =
+                root.split_horizontally(plot_width(self.size.0, &entries));
+            let mut chart = ChartBuilder::on(&plot_area)
                 .margin(12)
+                .margin_right(28)
                 .x_label_area_size(45)
                 .y_label_area_size(70)
                 .build_cartesian_2d(x0..x1, y0..y1)
@@ -135,25 +165,95 @@ impl LinePlot {
                         .map(|&m| PathElement::new(vec![(m, y0), (m, y1)], mark)),
                 )
                 .map_err(de)?;
-            for (k, s) in self.series.iter().enumerate() {
-                let c = series_color(k);
-                chart
-                    .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
-                    .map_err(de)?
-                    .label(s.name.as_str())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                    });
+            // A series lying on an earlier one is dashed, so both stay visible.
+            for (k, (s, (_, on))) in self.series.iter().zip(&labels).enumerate() {
+                let style = series_color(k).stroke_width(2);
+                let pts = s.points.iter().copied();
+                if *on {
+                    chart
+                        .draw_series(DashedLineSeries::new(pts, 7, 7, style))
+                        .map_err(de)?;
+                } else {
+                    chart.draw_series(LineSeries::new(pts, style)).map_err(de)?;
+                }
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font((FONT, 14))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(de)?;
-            Ok(())
+            draw_legend(&legend_area, &entries, shade)
         })
     }
+}
+
+/// One legend entry: a series (its colour; dashed when it lies on an earlier one) or
+/// the shaded intervals (no colour).
+struct Entry {
+    label: String,
+    color: Option<RGBColor>,
+    dashed: bool,
+}
+
+/// Legend labels: a series whose curve lies within `tol` of an earlier one everywhere
+/// (same x values) is labelled `"B (on A)"` and flagged, so coinciding curves are
+/// named and drawn dashed.
+fn legend_labels(series: &[Series], tol: f64) -> Vec<(String, bool)> {
+    series
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let same = series[..k].iter().find(|e| {
+                e.points.len() == s.points.len()
+                    && !s.points.is_empty()
+                    && e.points
+                        .iter()
+                        .zip(&s.points)
+                        .all(|(a, b)| a.0 == b.0 && (a.1 - b.1).abs() <= tol)
+            });
+            match same {
+                Some(e) => (format!("{} (on {})", s.name, e.name), true),
+                None => (s.name.clone(), false),
+            }
+        })
+        .collect()
+}
+
+/// Width of the plot column: the figure minus a legend column wide enough for the
+/// longest entry (about 8 px a character at 14 px).
+fn plot_width(total: u32, entries: &[Entry]) -> u32 {
+    let chars = entries
+        .iter()
+        .map(|e| e.label.chars().count())
+        .max()
+        .unwrap_or(0) as u32;
+    let legend = (chars * 8 + 44).clamp(90, total / 3);
+    total.saturating_sub(legend)
+}
+
+/// Draws the legend entries top-down into `area` (a line per series, a box for the
+/// shaded intervals).
+fn draw_legend(area: &Area<'_>, entries: &[Entry], shade: ShapeStyle) -> Result<(), String> {
+    for (i, e) in entries.iter().enumerate() {
+        let y = 30 + 22 * i as i32;
+        match (e.color, e.dashed) {
+            (Some(c), false) => area
+                .draw(&PathElement::new(vec![(4, y), (26, y)], c.stroke_width(3)))
+                .map_err(de)?,
+            (Some(c), true) => {
+                for x in [4, 18] {
+                    area.draw(&PathElement::new(
+                        vec![(x, y), (x + 8, y)],
+                        c.stroke_width(3),
+                    ))
+                    .map_err(de)?;
+                }
+            }
+            (None, _) => area
+                .draw(&Rectangle::new([(4, y - 7), (26, y + 7)], shade))
+                .map_err(de)?,
+        }
+        area.draw(&Text::new(
+            e.label.clone(),
+            (32, y),
+            text_style(14, HPos::Left, VPos::Center),
+        ))
+        .map_err(de)?;
+    }
+    Ok(())
 }

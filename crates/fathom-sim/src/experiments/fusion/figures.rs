@@ -163,6 +163,7 @@ pub(super) fn write_all(
         ));
         ep.markers_x = cc.to_vec();
         ep.shaded_x = cc.iter().map(|c| (c - hw, c + hw)).collect();
+        ep.shaded_label = format!("course change ± {hw} s");
         out.figure(&format!("err3d_{}.svg", m.slug()), &ep)?;
 
         let pooled: Vec<f64> = results

@@ -24,7 +24,7 @@ fn shade(mut p: LinePlot, invalid: &[(f64, f64)]) -> LinePlot {
     for &(a, b) in invalid {
         p = p.with_shade(a, b);
     }
-    p
+    p.with_shade_label("DVL invalid")
 }
 
 /// Adds every figure and CSV file to `out`.
@@ -244,7 +244,10 @@ pub(super) fn write(
     let tt: Vec<f64> = (0..runs[0].err_h[0].len()).map(|i| i as f64).collect();
     let means: Vec<Vec<f64>> = (0..METHODS.len()).map(|m| mean_series(runs, m)).collect();
     let mut all = LinePlot::new(
-        format!("horizontal error, mean of {} runs", runs.len()),
+        format!(
+            "horizontal error, mean of {} runs (zoom: horizontal_error_aided.svg)",
+            runs.len()
+        ),
         "time (s)",
         "horizontal error (m)",
     );
