@@ -25,6 +25,9 @@ pub struct LinePlot {
     pub shaded_label: String,
     /// x positions of vertical marker lines.
     pub markers_x: Vec<f64>,
+    /// 95 % CI bands `(x, lo, hi)` of mean curves, each with the index of its series
+    /// (drawn in its colour, named in the legend).
+    pub bands: Vec<(usize, Vec<(f64, f64, f64)>)>,
     /// Fixed y range `(lo, hi)`; `None` fits the data.
     pub y_range: Option<(f64, f64)>,
     /// Fixed x range `(lo, hi)` (e.g. a zoom window); `None` fits the data.
@@ -48,6 +51,7 @@ impl LinePlot {
             shaded_x: Vec::new(),
             shaded_label: "shaded: see caption".to_string(),
             markers_x: Vec::new(),
+            bands: Vec::new(),
             y_range: None,
             x_range: None,
             size: DEFAULT_SIZE,
@@ -72,6 +76,15 @@ impl LinePlot {
         self
     }
 
+    /// Add the 95 % CI band `(x, lo, hi)` of series `series` (a mean curve); an empty
+    /// band is ignored.
+    pub fn with_band(mut self, series: usize, band: Vec<(f64, f64, f64)>) -> Self {
+        if !band.is_empty() {
+            self.bands.push((series, band));
+        }
+        self
+    }
+
     /// Add a vertical marker line.
     pub fn with_marker(mut self, x: f64) -> Self {
         self.markers_x.push(x);
@@ -91,6 +104,11 @@ impl LinePlot {
         for (i, &m) in self.markers_x.iter().enumerate() {
             check_finite(path, &format!("marker {i}"), m)?;
         }
+        for (i, (_, band)) in self.bands.iter().enumerate() {
+            for &(x, lo, hi) in band {
+                check_finite(path, &format!("band {i}"), x + lo + hi)?;
+            }
+        }
         let pts = || self.series.iter().flat_map(|s| s.points.iter().copied());
         let (x0, x1) = match self.x_range {
             Some(r) => checked_range(path, "x_range", r)?,
@@ -102,7 +120,14 @@ impl LinePlot {
         let (y0, y1) = match self.y_range {
             Some(r) => checked_range(path, "y_range", r)?,
             None => {
-                let in_x = pts().filter(|p| p.0 >= x0 && p.0 <= x1).map(|p| p.1);
+                let band_pts = self
+                    .bands
+                    .iter()
+                    .flat_map(|b| b.1.iter().flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)]));
+                let in_x = pts()
+                    .chain(band_pts)
+                    .filter(|p| p.0 >= x0 && p.0 <= x1)
+                    .map(|p| p.1);
                 let (a, b) = min_max(in_x);
                 if a.is_finite() {
                     padded(a, b)
@@ -111,21 +136,29 @@ impl LinePlot {
                 }
             }
         };
-        let labels = legend_labels(&self.series, (y1 - y0) * 2.0 / f64::from(self.size.1));
+        let labels = legend_labels(&self.series, 0.0, (y1 - y0) * 2.0 / f64::from(self.size.1));
         let mut entries: Vec<Entry> = labels
             .iter()
             .enumerate()
             .map(|(k, (l, on))| Entry {
                 label: l.clone(),
-                color: Some(series_color(k)),
-                dashed: *on,
+                swatch: if *on {
+                    Swatch::Dashed(series_color(k))
+                } else {
+                    Swatch::Line(series_color(k))
+                },
             })
             .collect();
         if !self.shaded_x.is_empty() {
             entries.push(Entry {
                 label: self.shaded_label.clone(),
-                color: None,
-                dashed: false,
+                swatch: Swatch::Shade,
+            });
+        }
+        if let Some((k, _)) = self.bands.first() {
+            entries.push(Entry {
+                label: "band: 95 % CI of the mean".to_string(),
+                swatch: Swatch::Band(series_color(*k)),
             });
         }
         render(path, self.size, |root| {
@@ -165,6 +198,16 @@ impl LinePlot {
                         .map(|&m| PathElement::new(vec![(m, y0), (m, y1)], mark)),
                 )
                 .map_err(de)?;
+            for (k, band) in &self.bands {
+                let mut outline: Vec<(f64, f64)> = band.iter().map(|&(x, _, hi)| (x, hi)).collect();
+                outline.extend(band.iter().rev().map(|&(x, lo, _)| (x, lo)));
+                chart
+                    .draw_series(std::iter::once(Polygon::new(
+                        outline,
+                        series_color(*k).mix(0.25).filled(),
+                    )))
+                    .map_err(de)?;
+            }
             // A series lying on an earlier one is dashed, so both stay visible.
             for (k, (s, (_, on))) in self.series.iter().zip(&labels).enumerate() {
                 let style = series_color(k).stroke_width(2);
@@ -182,18 +225,28 @@ impl LinePlot {
     }
 }
 
-/// One legend entry: a series (its colour; dashed when it lies on an earlier one) or
-/// the shaded intervals (no colour).
-struct Entry {
-    label: String,
-    color: Option<RGBColor>,
-    dashed: bool,
+/// What a legend entry shows.
+enum Swatch {
+    /// A series.
+    Line(RGBColor),
+    /// A series lying on an earlier one (drawn dashed).
+    Dashed(RGBColor),
+    /// The shaded x-intervals.
+    Shade,
+    /// A CI band in the colour of its series.
+    Band(RGBColor),
 }
 
-/// Legend labels: a series whose curve lies within `tol` of an earlier one everywhere
-/// (same x values) is labelled `"B (on A)"` and flagged, so coinciding curves are
-/// named and drawn dashed.
-fn legend_labels(series: &[Series], tol: f64) -> Vec<(String, bool)> {
+/// One legend entry.
+struct Entry {
+    label: String,
+    swatch: Swatch,
+}
+
+/// Legend labels: a series whose points all lie within `(tol_x, tol_y)` of an earlier
+/// one's (about two pixels: the curves coincide on the figure) is labelled
+/// `"B (on A)"` and flagged, so coinciding curves are named and drawn dashed.
+pub(super) fn legend_labels(series: &[Series], tol_x: f64, tol_y: f64) -> Vec<(String, bool)> {
     series
         .iter()
         .enumerate()
@@ -204,7 +257,7 @@ fn legend_labels(series: &[Series], tol: f64) -> Vec<(String, bool)> {
                     && e.points
                         .iter()
                         .zip(&s.points)
-                        .all(|(a, b)| a.0 == b.0 && (a.1 - b.1).abs() <= tol)
+                        .all(|(a, b)| (a.0 - b.0).abs() <= tol_x && (a.1 - b.1).abs() <= tol_y)
             });
             match same {
                 Some(e) => (format!("{} (on {})", s.name, e.name), true),
@@ -231,11 +284,11 @@ fn plot_width(total: u32, entries: &[Entry]) -> u32 {
 fn draw_legend(area: &Area<'_>, entries: &[Entry], shade: ShapeStyle) -> Result<(), String> {
     for (i, e) in entries.iter().enumerate() {
         let y = 30 + 22 * i as i32;
-        match (e.color, e.dashed) {
-            (Some(c), false) => area
+        match e.swatch {
+            Swatch::Line(c) => area
                 .draw(&PathElement::new(vec![(4, y), (26, y)], c.stroke_width(3)))
                 .map_err(de)?,
-            (Some(c), true) => {
+            Swatch::Dashed(c) => {
                 for x in [4, 18] {
                     area.draw(&PathElement::new(
                         vec![(x, y), (x + 8, y)],
@@ -244,8 +297,14 @@ fn draw_legend(area: &Area<'_>, entries: &[Entry], shade: ShapeStyle) -> Result<
                     .map_err(de)?;
                 }
             }
-            (None, _) => area
+            Swatch::Shade => area
                 .draw(&Rectangle::new([(4, y - 7), (26, y + 7)], shade))
+                .map_err(de)?,
+            Swatch::Band(c) => area
+                .draw(&Rectangle::new(
+                    [(4, y - 7), (26, y + 7)],
+                    c.mix(0.25).filled(),
+                ))
                 .map_err(de)?,
         }
         area.draw(&Text::new(

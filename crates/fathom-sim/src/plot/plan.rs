@@ -91,6 +91,11 @@ impl PlanPlot {
             (x0, x1) = (cx - 0.5 * scale * w, cx + 0.5 * scale * w);
             (y0, y1) = (cy - 0.5 * scale * h, cy + 0.5 * scale * h);
         }
+        let labels = super::line::legend_labels(
+            &self.paths,
+            (x1 - x0) * 2.0 / f64::from(self.size.0),
+            (y1 - y0) * 2.0 / f64::from(self.size.1),
+        );
         render(path, self.size, |root| {
             let area = root.titled(&self.title, title_style(22)).map_err(de)?;
             let mut chart = ChartBuilder::on(&area)
@@ -108,12 +113,18 @@ impl PlanPlot {
                 .label_style((FONT, 15))
                 .draw()
                 .map_err(de)?;
-            for (k, s) in self.paths.iter().enumerate() {
+            // A path lying on an earlier one is dashed and named "B (on A)".
+            for (k, (s, (label, on))) in self.paths.iter().zip(&labels).enumerate() {
                 let c = series_color(k);
-                chart
-                    .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
+                let pts = s.points.iter().copied();
+                let drawn = if *on {
+                    chart.draw_series(DashedLineSeries::new(pts, 7, 7, c.stroke_width(2)))
+                } else {
+                    chart.draw_series(LineSeries::new(pts, c.stroke_width(2)))
+                };
+                drawn
                     .map_err(de)?
-                    .label(s.name.as_str())
+                    .label(label.as_str())
                     .legend(move |(x, y)| {
                         PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
                     });

@@ -6,7 +6,7 @@ use super::scenario::Checked;
 use super::sim::{ESKF, GATED, INS_DVL, METHODS, PINS, RunOutput, Shared, VKF};
 use crate::SimError;
 use crate::experiment::Analysis;
-use crate::plot::{LinePlot, PlanPlot, Series};
+use crate::plot::{LinePlot, PlanPlot, Series, mean_with_ci95};
 
 /// `y_range` as a builder step.
 trait WithYRange {
@@ -282,6 +282,9 @@ pub(super) fn write(
             "horizontal error (m)",
         )
         .with_series(Series::from_xy("mean", &tt, &means[m])?);
+        let per_run: Vec<&[f64]> = runs.iter().map(|r| r.err_h[m].as_slice()).collect();
+        let (_, band) = mean_with_ci95(&tt, &per_run)?;
+        p = p.with_band(0, band);
         for (i, r) in runs.iter().take(5).enumerate() {
             p = p.with_series(Series::from_xy(format!("run {i}"), &tt, &r.err_h[m])?);
         }
