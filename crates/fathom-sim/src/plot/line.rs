@@ -27,7 +27,7 @@ pub struct LinePlot {
     pub markers_x: Vec<f64>,
     /// 95 % CI bands `(x, lo, hi)` of mean curves, each with the index of its series
     /// (drawn in its colour, named in the legend).
-    pub bands: Vec<(usize, Vec<(f64, f64, f64)>)>,
+    pub bands: Vec<(usize, Band)>,
     /// Fixed y range `(lo, hi)`; `None` fits the data.
     pub y_range: Option<(f64, f64)>,
     /// Fixed x range `(lo, hi)` (e.g. a zoom window); `None` fits the data.
@@ -78,7 +78,7 @@ impl LinePlot {
 
     /// Add the 95 % CI band `(x, lo, hi)` of series `series` (a mean curve); an empty
     /// band is ignored.
-    pub fn with_band(mut self, series: usize, band: Vec<(f64, f64, f64)>) -> Self {
+    pub fn with_band(mut self, series: usize, band: Band) -> Self {
         if !band.is_empty() {
             self.bands.push((series, band));
         }
@@ -226,7 +226,7 @@ impl LinePlot {
 }
 
 /// What a legend entry shows.
-enum Swatch {
+pub(super) enum Swatch {
     /// A series.
     Line(RGBColor),
     /// A series lying on an earlier one (drawn dashed).
@@ -235,12 +235,14 @@ enum Swatch {
     Shade,
     /// A CI band in the colour of its series.
     Band(RGBColor),
+    /// A set of triangle markers.
+    Marker(RGBColor),
 }
 
 /// One legend entry.
-struct Entry {
-    label: String,
-    swatch: Swatch,
+pub(super) struct Entry {
+    pub(super) label: String,
+    pub(super) swatch: Swatch,
 }
 
 /// Legend labels: a series whose points all lie within `(tol_x, tol_y)` of an earlier
@@ -269,7 +271,7 @@ pub(super) fn legend_labels(series: &[Series], tol_x: f64, tol_y: f64) -> Vec<(S
 
 /// Width of the plot column: the figure minus a legend column wide enough for the
 /// longest entry (about 8 px a character at 14 px).
-fn plot_width(total: u32, entries: &[Entry]) -> u32 {
+pub(super) fn plot_width(total: u32, entries: &[Entry]) -> u32 {
     let chars = entries
         .iter()
         .map(|e| e.label.chars().count())
@@ -281,7 +283,11 @@ fn plot_width(total: u32, entries: &[Entry]) -> u32 {
 
 /// Draws the legend entries top-down into `area` (a line per series, a box for the
 /// shaded intervals).
-fn draw_legend(area: &Area<'_>, entries: &[Entry], shade: ShapeStyle) -> Result<(), String> {
+pub(super) fn draw_legend(
+    area: &Area<'_>,
+    entries: &[Entry],
+    shade: ShapeStyle,
+) -> Result<(), String> {
     for (i, e) in entries.iter().enumerate() {
         let y = 30 + 22 * i as i32;
         match e.swatch {
@@ -299,6 +305,9 @@ fn draw_legend(area: &Area<'_>, entries: &[Entry], shade: ShapeStyle) -> Result<
             }
             Swatch::Shade => area
                 .draw(&Rectangle::new([(4, y - 7), (26, y + 7)], shade))
+                .map_err(de)?,
+            Swatch::Marker(c) => area
+                .draw(&TriangleMarker::new((15, y), 6, c.filled()))
                 .map_err(de)?,
             Swatch::Band(c) => area
                 .draw(&Rectangle::new(

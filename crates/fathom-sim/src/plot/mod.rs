@@ -83,16 +83,16 @@ impl Series {
     }
 }
 
+/// A confidence band: `(x, lo, hi)` per point.
+pub type Band = Vec<(f64, f64, f64)>;
+
 /// The per-x mean over runs and its 95 % CI band `(x, lo, hi)` (Student t over the
 /// runs at each x), for a mean curve drawn with its interval. Every run has one value
 /// per x; with fewer than two runs the band is empty.
 ///
 /// # Errors
 /// [`SimError::InvalidArgument`] if a run's length differs from `xs`.
-pub fn mean_with_ci95(
-    xs: &[f64],
-    runs: &[&[f64]],
-) -> Result<(Vec<f64>, Vec<(f64, f64, f64)>), SimError> {
+pub fn mean_with_ci95(xs: &[f64], runs: &[&[f64]]) -> Result<(Vec<f64>, Band), SimError> {
     if let Some(r) = runs.iter().find(|r| r.len() != xs.len()) {
         return Err(SimError::invalid_argument(
             "mean curve",
