@@ -292,3 +292,65 @@ fn plaza_through_the_layout_gives_the_plaza_numbers() {
     assert!(a.len() >= 4, "{own}");
     assert_eq!(a, b, "own:\n{own}\nnative:\n{native}");
 }
+
+/// The own-log replays write through the same safe output folder as `fathom run`: a
+/// folder holding the user's file is refused (exit 2, one line naming `--out`, the
+/// file and `--force`) and kept; `--force` writes fathom's files beside it; a refused
+/// log leaves no temporary folder behind.
+#[test]
+fn own_log_replay_keeps_a_users_file_in_out() {
+    let root = scratch("own-logs-out");
+    ok(
+        &root,
+        &["log", "example", "range-beacon", "rb", "--duration", "60"],
+    );
+    std::fs::create_dir_all(root.join("o")).unwrap();
+    std::fs::write(root.join("o/notes.md"), "my own notes").unwrap();
+    usage_error(
+        &root,
+        &["replay", "range-beacon", "rb", "--out", "o"],
+        &["--out", "notes.md", "--force"],
+    );
+    let names = |d: &str| -> Vec<String> {
+        let mut v: Vec<String> = std::fs::read_dir(root.join(d))
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        v.sort();
+        v
+    };
+    assert_eq!(names("o"), ["notes.md"]);
+    ok(
+        &root,
+        &["replay", "range-beacon", "rb", "--out", "o", "--force"],
+    );
+    assert_eq!(read(&root, "o/notes.md"), "my own notes");
+    let files = names("o");
+    for f in ["report.md", "summary.json", "run_info.json", "notes.md"] {
+        assert!(files.iter().any(|x| x == f), "{f} not in {files:?}");
+    }
+    let info: serde_json::Value =
+        serde_json::from_str(&read(&root, "o/run_info.json")).expect("run_info.json");
+    assert_eq!(info["command"], "replay", "{info}");
+    let listed = info["files"].as_array().expect("files");
+    assert!(listed.iter().any(|f| f == "summary.json"), "{info}");
+    assert!(!listed.iter().any(|f| f == "notes.md"), "{info}");
+    // A second replay without --force is refused again; the user's file survives.
+    usage_error(
+        &root,
+        &["replay", "ins-dvl", "rb", "--out", "o"],
+        &["notes.md"],
+    );
+    assert_eq!(read(&root, "o/notes.md"), "my own notes");
+    // A log refused after the claim leaves nothing beside `--out`.
+    usage_error(
+        &root,
+        &["replay", "range-beacon", "no-such-log", "--out", "o2"],
+        &["no-such-log"],
+    );
+    let stray: Vec<String> = names(".")
+        .into_iter()
+        .filter(|n| n.starts_with(".o2") || n == "o2")
+        .collect();
+    assert!(stray.is_empty(), "{stray:?}");
+}

@@ -214,3 +214,130 @@ fn few_beacons_and_bad_beacon_edits() {
         }
     }
 }
+
+/// `text` with the top-level line `line` added after its `runs` key.
+fn with_top_level(text: &str, line: &str) -> String {
+    let runs = text
+        .lines()
+        .find(|l| l.starts_with("runs = "))
+        .expect("the preset has a runs line");
+    text.replacen(runs, &format!("{runs}\n{line}"), 1)
+}
+
+/// `methods = [...]` runs, reports and plots only the selected schemes (the paper's
+/// scheme comparisons are left out with a note); an unknown name is a one-line usage
+/// error naming the key and listing what `beacons` accepts; `fathom list` names them.
+#[test]
+fn methods_select_the_schemes_run() {
+    let dir = scratch("user-methods");
+    let text = with_top_level(&edited(THREE), "methods = [\"SI\", \"AS\"]");
+    std::fs::write(dir.join("two.toml"), &text).unwrap();
+    let ran = fathom(&dir, &["run", "two.toml", "--runs", "3", "--out", "two"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let out = dir.join("two");
+    let summary: serde_json::Value = serde_json::from_str(&read(&out, "summary.json")).unwrap();
+    let methods: std::collections::BTreeSet<String> = summary["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["method"].as_str().unwrap().to_string())
+        .collect();
+    assert!(
+        methods.contains("AS/high") && methods.contains("SI/high"),
+        "{methods:?}"
+    );
+    assert!(!methods.iter().any(|m| m.starts_with("SC")), "{methods:?}");
+    // The claims compare all three schemes: none is made with two.
+    assert_eq!(
+        summary["claims"].as_array().map_or(0, Vec::len),
+        0,
+        "{summary}"
+    );
+    let report = read(&out, "report.md");
+    assert!(report.contains("Selected schemes: AS, SI"), "{report}");
+    assert!(!report.contains("| SC/high"), "{report}");
+    let csv = read(&out, "error_vs_time.csv");
+    assert!(
+        csv.starts_with("time_s,AS_high_mean_error_m,SI_high_mean_error_m"),
+        "{csv}"
+    );
+    assert!(out.join("as_estimate_vs_truth_plan.svg").exists());
+    assert!(!out.join("sc_estimate_vs_truth_plan.svg").exists());
+    // An SVG legend entry is `<text ...>\nSC\n</text>`.
+    assert!(!read(&out, "error_vs_time_high.svg").contains("\nSC\n</text>"));
+
+    // Negative control: without the key all three schemes run.
+    std::fs::write(dir.join("all.toml"), edited(THREE)).unwrap();
+    let ran = fathom(&dir, &["run", "all.toml", "--runs", "3", "--out", "all"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    assert!(read(&dir.join("all"), "summary.json").contains("\"SC/high\""));
+    assert!(read(&dir.join("all"), "error_vs_time_high.svg").contains("\nSC\n</text>"));
+
+    let bad = with_top_level(&edited(THREE), "methods = [\"AS\", \"UKF\"]");
+    std::fs::write(dir.join("bad.toml"), bad).unwrap();
+    for args in [
+        &["check", "bad.toml"][..],
+        &["run", "bad.toml", "--out", "bad"],
+    ] {
+        let r = fathom(&dir, args);
+        assert_eq!(r.code, 2, "{r:?}");
+        let line = r.stderr.trim_end();
+        assert_eq!(line.lines().count(), 1, "{line}");
+        for w in ["`methods[1]`", "\"UKF\"", "AS, SC, SI"] {
+            assert!(line.contains(w), "`{w}` not in {line}");
+        }
+    }
+    assert!(!dir.join("bad").exists());
+    let list = fathom(&dir, &["list"]);
+    assert!(
+        list.stdout.contains("methods = [\"AS\", \"SC\", \"SI\"]"),
+        "{}",
+        list.stdout
+    );
+    assert!(
+        list.stdout.contains("\"EFF-no-feedback\""),
+        "{}",
+        list.stdout
+    );
+}
+
+/// `fusion` with `methods = ["EFF", "MF"]` runs only the main batch of those two: its
+/// rows name no other method, its report says what was left out; an unknown name is
+/// a one-line usage error listing the accepted names.
+#[test]
+fn fusion_methods_select_the_methods_run() {
+    let dir = scratch("user-fusion-methods");
+    let text = with_top_level(&preset("fusion.toml"), "methods = [\"EFF\", \"MF\"]");
+    std::fs::write(dir.join("two.toml"), &text).unwrap();
+    let ran = fathom(&dir, &["run", "two.toml", "--runs", "2", "--out", "two"]);
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let out = dir.join("two");
+    let summary: serde_json::Value = serde_json::from_str(&read(&out, "summary.json")).unwrap();
+    let methods: std::collections::BTreeSet<&str> = summary["rows"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|r| r["method"].as_str().unwrap())
+        .collect();
+    assert_eq!(methods.into_iter().collect::<Vec<_>>(), ["EFF", "MF"]);
+    assert_eq!(
+        summary["claims"].as_array().map_or(0, Vec::len),
+        0,
+        "{summary}"
+    );
+    let report = read(&out, "report.md");
+    assert!(report.contains("Selected methods: MF, EFF"), "{report}");
+    assert!(report.contains("sensitivity sweeps"), "{report}");
+    assert!(out.join("err3d_selected.svg").exists());
+    assert!(!out.join("err3d_all.svg").exists());
+
+    let bad = with_top_level(&preset("fusion.toml"), "methods = [\"EKF\"]");
+    std::fs::write(dir.join("bad.toml"), bad).unwrap();
+    let r = fathom(&dir, &["check", "bad.toml"]);
+    assert_eq!(r.code, 2, "{r:?}");
+    let line = r.stderr.trim_end();
+    assert_eq!(line.lines().count(), 1, "{line}");
+    for w in ["`methods[0]`", "\"EKF\"", "MF, T2T, EFF", "DVL-DR"] {
+        assert!(line.contains(w), "`{w}` not in {line}");
+    }
+}

@@ -245,7 +245,7 @@ enum Failure {
 
 /// The one exit-code rule: [`SimError::is_user_error`] decides; the message is the
 /// whole cause chain on one line.
-fn failure(e: SimError) -> Failure {
+pub(crate) fn failure(e: SimError) -> Failure {
     let line = anyhow!(one_line(&error_chain(&e)));
     if e.is_user_error() {
         Failure::Usage(line)
@@ -549,6 +549,17 @@ fn list_cmd() -> String {
             e.seed_doc(),
             e.default_scenario()
         ));
+        if !e.methods().is_empty() {
+            text.push_str(&format!(
+                "  {:<8} methods = [{}] (default: all)\n",
+                "",
+                e.methods()
+                    .iter()
+                    .map(|m| format!("{m:?}"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
     }
     text.push_str("estimators:\n");
     for (name, doc) in ESTIMATORS {

@@ -11,7 +11,7 @@ use fathom_sim::data::layout::{FileSet, LogKind, Manifest, write_log};
 use fathom_sim::data::plaza::PlazaLog;
 use fathom_sim::example_log::{ins_dvl_example, range_beacon_example};
 use fathom_sim::experiments::plaza::Plaza;
-use fathom_sim::replay::own_log::{OwnLogError, preset, replay_dir, write_outputs};
+use fathom_sim::replay::own_log::{OwnLogError, claim_output, preset, replay_dir, write_outputs};
 use fathom_sim::replay::plaza::parse_settings;
 use fathom_sim::user_run::one_line;
 use fathom_sim::{Experiment, error_chain};
@@ -29,6 +29,10 @@ pub(crate) struct OwnArgs {
     /// Output folder (default `range-beacon-replay` / `ins-dvl-replay`).
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
 }
 
 /// The two kinds of log.
@@ -119,15 +123,13 @@ pub(crate) fn replay_own(kind: LogKind, args: &OwnArgs) -> Result<String, Failur
         .out
         .clone()
         .unwrap_or_else(|| PathBuf::from(format!("{}-replay", kind.name())));
+    // Claimed before the replay: a refused or unwritable folder costs no computing.
+    let claim = claim_output(&out, args.force).map_err(crate::failure)?;
+    let start = std::time::Instant::now();
     let r = replay_dir(kind, &args.dir, &text, &label).map_err(own_failure)?;
-    write_outputs(&out, &r.files).map_err(|e| Failure::Run(anyhow!(one_line(&error_chain(&e)))))?;
-    Ok(format!(
-        "{}
-outputs: {}
-",
-        r.console,
-        out.display()
-    ))
+    let elapsed = start.elapsed().as_secs_f64();
+    let out = write_outputs(claim, kind, &label, &r.files, elapsed).map_err(crate::failure)?;
+    Ok(format!("{}\noutputs: {}\n", r.console, out.display()))
 }
 
 pub(crate) fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {

@@ -1,5 +1,6 @@
-//! Method selection in scenario files: the `methods = [...]` key every experiment
-//! has (default: all its methods), and the names of the `[[methods]]` tables of the
+//! Method selection in scenario files: the `methods = [...]` key of the experiments
+//! that have one ([`crate::experiment::Experiment::METHODS`] not empty; default: all
+//! their methods), and the names of the `[[methods]]` tables of the
 //! replays of one's own logs. Errors name the key (`methods[2]`) and list what the
 //! experiment accepts.
 

@@ -133,6 +133,8 @@ pub trait DynExperiment: Send + Sync {
     fn default_scenario(&self) -> &'static str;
     /// [`Experiment::ABOUT`].
     fn about(&self) -> &'static str;
+    /// [`Experiment::METHODS`].
+    fn methods(&self) -> &'static [&'static str];
     /// [`Experiment::PRESET`].
     fn preset(&self) -> &'static str;
     /// The JSON schema of the scenario file (field docs as descriptions), from which
@@ -412,6 +414,10 @@ impl<E: Experiment> DynExperiment for E {
 
     fn about(&self) -> &'static str {
         E::ABOUT
+    }
+
+    fn methods(&self) -> &'static [&'static str] {
+        E::METHODS
     }
 
     fn preset(&self) -> &'static str {

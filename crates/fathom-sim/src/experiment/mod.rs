@@ -170,6 +170,9 @@ pub trait Experiment: Clone + Send + Sync + 'static {
     const PRESET: &'static str;
     /// One line for `fathom list`.
     const ABOUT: &'static str;
+    /// The names the scenario's `methods = [...]` key accepts, in report order (shown
+    /// by `fathom list`); empty when the experiment has no `methods` key.
+    const METHODS: &'static [&'static str] = &[];
 
     /// Validates `scenario` (`file` labels error messages). Fast and free of I/O.
     ///

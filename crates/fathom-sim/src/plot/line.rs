@@ -13,7 +13,7 @@ use crate::error::SimError;
 pub struct LinePlot {
     /// Figure title.
     pub title: String,
-    /// x-axis label (with unit, e.g. `"time [s]"`).
+    /// x-axis label (unit in parentheses, e.g. `"time (s)"`).
     pub x_label: String,
     /// y-axis label (with unit).
     pub y_label: String,
@@ -21,8 +21,13 @@ pub struct LinePlot {
     pub series: Vec<Series>,
     /// Shaded x-intervals `(from, to)` drawn behind the series.
     pub shaded_x: Vec<(f64, f64)>,
+    /// What the shaded intervals mean: their legend entry (e.g. `"DVL invalid"`).
+    pub shaded_label: String,
     /// x positions of vertical marker lines.
     pub markers_x: Vec<f64>,
+    /// 95 % CI bands `(x, lo, hi)` of mean curves, each with the index of its series
+    /// (drawn in its colour, named in the legend).
+    pub bands: Vec<(usize, Band)>,
     /// Fixed y range `(lo, hi)`; `None` fits the data.
     pub y_range: Option<(f64, f64)>,
     /// Fixed x range `(lo, hi)` (e.g. a zoom window); `None` fits the data.
@@ -44,7 +49,9 @@ impl LinePlot {
             y_label: y_label.into(),
             series: Vec::new(),
             shaded_x: Vec::new(),
+            shaded_label: "shaded: see caption".to_string(),
             markers_x: Vec::new(),
+            bands: Vec::new(),
             y_range: None,
             x_range: None,
             size: DEFAULT_SIZE,
@@ -60,6 +67,21 @@ impl LinePlot {
     /// Add a shaded x-interval.
     pub fn with_shade(mut self, from: f64, to: f64) -> Self {
         self.shaded_x.push((from, to));
+        self
+    }
+
+    /// Name the shaded intervals in the legend.
+    pub fn with_shade_label(mut self, label: impl Into<String>) -> Self {
+        self.shaded_label = label.into();
+        self
+    }
+
+    /// Add the 95 % CI band `(x, lo, hi)` of series `series` (a mean curve); an empty
+    /// band is ignored.
+    pub fn with_band(mut self, series: usize, band: Band) -> Self {
+        if !band.is_empty() {
+            self.bands.push((series, band));
+        }
         self
     }
 
@@ -82,6 +104,11 @@ impl LinePlot {
         for (i, &m) in self.markers_x.iter().enumerate() {
             check_finite(path, &format!("marker {i}"), m)?;
         }
+        for (i, (_, band)) in self.bands.iter().enumerate() {
+            for &(x, lo, hi) in band {
+                check_finite(path, &format!("band {i}"), x + lo + hi)?;
+            }
+        }
         let pts = || self.series.iter().flat_map(|s| s.points.iter().copied());
         let (x0, x1) = match self.x_range {
             Some(r) => checked_range(path, "x_range", r)?,
@@ -93,7 +120,14 @@ impl LinePlot {
         let (y0, y1) = match self.y_range {
             Some(r) => checked_range(path, "y_range", r)?,
             None => {
-                let in_x = pts().filter(|p| p.0 >= x0 && p.0 <= x1).map(|p| p.1);
+                let band_pts = self
+                    .bands
+                    .iter()
+                    .flat_map(|b| b.1.iter().flat_map(|&(x, lo, hi)| [(x, lo), (x, hi)]));
+                let in_x = pts()
+                    .chain(band_pts)
+                    .filter(|p| p.0 >= x0 && p.0 <= x1)
+                    .map(|p| p.1);
                 let (a, b) = min_max(in_x);
                 if a.is_finite() {
                     padded(a, b)
@@ -102,10 +136,39 @@ impl LinePlot {
                 }
             }
         };
+        let labels = legend_labels(&self.series, 0.0, (y1 - y0) * 2.0 / f64::from(self.size.1));
+        let mut entries: Vec<Entry> = labels
+            .iter()
+            .enumerate()
+            .map(|(k, (l, on))| Entry {
+                label: l.clone(),
+                swatch: if *on {
+                    Swatch::Dashed(series_color(k))
+                } else {
+                    Swatch::Line(series_color(k))
+                },
+            })
+            .collect();
+        if !self.shaded_x.is_empty() {
+            entries.push(Entry {
+                label: self.shaded_label.clone(),
+                swatch: Swatch::Shade,
+            });
+        }
+        if let Some((k, _)) = self.bands.first() {
+            entries.push(Entry {
+                label: "band: 95 % CI of the mean".to_string(),
+                swatch: Swatch::Band(series_color(*k)),
+            });
+        }
         render(path, self.size, |root| {
-            let mut chart = ChartBuilder::on(root)
-                .caption(&self.title, title_style(22))
+            let root = root.titled(&self.title, title_style(22)).map_err(de)?;
+            // The legend in its own column right of the plot: it never covers data.
+            let (plot_area, legend_area) =
+                root.split_horizontally(plot_width(self.size.0, &entries));
+            let mut chart = ChartBuilder::on(&plot_area)
                 .margin(12)
+                .margin_right(28)
                 .x_label_area_size(45)
                 .y_label_area_size(70)
                 .build_cartesian_2d(x0..x1, y0..y1)
@@ -135,25 +198,130 @@ impl LinePlot {
                         .map(|&m| PathElement::new(vec![(m, y0), (m, y1)], mark)),
                 )
                 .map_err(de)?;
-            for (k, s) in self.series.iter().enumerate() {
-                let c = series_color(k);
+            for (k, band) in &self.bands {
+                let mut outline: Vec<(f64, f64)> = band.iter().map(|&(x, _, hi)| (x, hi)).collect();
+                outline.extend(band.iter().rev().map(|&(x, lo, _)| (x, lo)));
                 chart
-                    .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
-                    .map_err(de)?
-                    .label(s.name.as_str())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                    });
+                    .draw_series(std::iter::once(Polygon::new(
+                        outline,
+                        series_color(*k).mix(0.25).filled(),
+                    )))
+                    .map_err(de)?;
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font((FONT, 14))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(de)?;
-            Ok(())
+            // A series lying on an earlier one is dashed, so both stay visible.
+            for (k, (s, (_, on))) in self.series.iter().zip(&labels).enumerate() {
+                let style = series_color(k).stroke_width(2);
+                let pts = s.points.iter().copied();
+                if *on {
+                    chart
+                        .draw_series(DashedLineSeries::new(pts, 7, 7, style))
+                        .map_err(de)?;
+                } else {
+                    chart.draw_series(LineSeries::new(pts, style)).map_err(de)?;
+                }
+            }
+            draw_legend(&legend_area, &entries, shade)
         })
     }
+}
+
+/// What a legend entry shows.
+pub(super) enum Swatch {
+    /// A series.
+    Line(RGBColor),
+    /// A series lying on an earlier one (drawn dashed).
+    Dashed(RGBColor),
+    /// The shaded x-intervals.
+    Shade,
+    /// A CI band in the colour of its series.
+    Band(RGBColor),
+    /// A set of triangle markers.
+    Marker(RGBColor),
+}
+
+/// One legend entry.
+pub(super) struct Entry {
+    pub(super) label: String,
+    pub(super) swatch: Swatch,
+}
+
+/// Legend labels: a series whose points all lie within `(tol_x, tol_y)` of an earlier
+/// one's (about two pixels: the curves coincide on the figure) is labelled
+/// `"B (on A)"` and flagged, so coinciding curves are named and drawn dashed.
+pub(super) fn legend_labels(series: &[Series], tol_x: f64, tol_y: f64) -> Vec<(String, bool)> {
+    series
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            let same = series[..k].iter().find(|e| {
+                e.points.len() == s.points.len()
+                    && !s.points.is_empty()
+                    && e.points
+                        .iter()
+                        .zip(&s.points)
+                        .all(|(a, b)| (a.0 - b.0).abs() <= tol_x && (a.1 - b.1).abs() <= tol_y)
+            });
+            match same {
+                Some(e) => (format!("{} (on {})", s.name, e.name), true),
+                None => (s.name.clone(), false),
+            }
+        })
+        .collect()
+}
+
+/// Width of the plot column: the figure minus a legend column wide enough for the
+/// longest entry (about 8 px a character at 14 px).
+pub(super) fn plot_width(total: u32, entries: &[Entry]) -> u32 {
+    let chars = entries
+        .iter()
+        .map(|e| e.label.chars().count())
+        .max()
+        .unwrap_or(0) as u32;
+    let legend = (chars * 8 + 44).clamp(90, total / 3);
+    total.saturating_sub(legend)
+}
+
+/// Draws the legend entries top-down into `area` (a line per series, a box for the
+/// shaded intervals).
+pub(super) fn draw_legend(
+    area: &Area<'_>,
+    entries: &[Entry],
+    shade: ShapeStyle,
+) -> Result<(), String> {
+    for (i, e) in entries.iter().enumerate() {
+        let y = 30 + 22 * i as i32;
+        match e.swatch {
+            Swatch::Line(c) => area
+                .draw(&PathElement::new(vec![(4, y), (26, y)], c.stroke_width(3)))
+                .map_err(de)?,
+            Swatch::Dashed(c) => {
+                for x in [4, 18] {
+                    area.draw(&PathElement::new(
+                        vec![(x, y), (x + 8, y)],
+                        c.stroke_width(3),
+                    ))
+                    .map_err(de)?;
+                }
+            }
+            Swatch::Shade => area
+                .draw(&Rectangle::new([(4, y - 7), (26, y + 7)], shade))
+                .map_err(de)?,
+            Swatch::Marker(c) => area
+                .draw(&TriangleMarker::new((15, y), 6, c.filled()))
+                .map_err(de)?,
+            Swatch::Band(c) => area
+                .draw(&Rectangle::new(
+                    [(4, y - 7), (26, y + 7)],
+                    c.mix(0.25).filled(),
+                ))
+                .map_err(de)?,
+        }
+        area.draw(&Text::new(
+            e.label.clone(),
+            (32, y),
+            text_style(14, HPos::Left, VPos::Center),
+        ))
+        .map_err(de)?;
+    }
+    Ok(())
 }

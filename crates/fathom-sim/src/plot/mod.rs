@@ -83,6 +83,38 @@ impl Series {
     }
 }
 
+/// A confidence band: `(x, lo, hi)` per point.
+pub type Band = Vec<(f64, f64, f64)>;
+
+/// The per-x mean over runs and its 95 % CI band `(x, lo, hi)` (Student t over the
+/// runs at each x), for a mean curve drawn with its interval. Every run has one value
+/// per x; with fewer than two runs the band is empty.
+///
+/// # Errors
+/// [`SimError::InvalidArgument`] if a run's length differs from `xs`.
+pub fn mean_with_ci95(xs: &[f64], runs: &[&[f64]]) -> Result<(Vec<f64>, Band), SimError> {
+    if let Some(r) = runs.iter().find(|r| r.len() != xs.len()) {
+        return Err(SimError::invalid_argument(
+            "mean curve",
+            format!("{} x values but a run of {}", xs.len(), r.len()),
+        ));
+    }
+    let mut mean = Vec::with_capacity(xs.len());
+    let mut band = Vec::new();
+    let mut column = Vec::with_capacity(runs.len());
+    for (j, &x) in xs.iter().enumerate() {
+        column.clear();
+        column.extend(runs.iter().map(|r| r[j]));
+        let m = column.iter().sum::<f64>() / column.len().max(1) as f64;
+        mean.push(m);
+        if runs.len() >= 2 {
+            let (_, [lo, hi]) = fathom_stats::mean_and_ci95(&column)?;
+            band.push((x, lo, hi));
+        }
+    }
+    Ok((mean, band))
+}
+
 fn plot_err(path: &Path, reason: impl Into<String>) -> SimError {
     SimError::Plot {
         path: path.to_path_buf(),
@@ -441,5 +473,42 @@ mod tests {
         assert_eq!(heat_color(0.0), RGBColor(68, 1, 84));
         assert_eq!(heat_color(1.0), RGBColor(253, 231, 37));
         assert_eq!(heat_color(f64::NAN), heat_color(0.0));
+    }
+
+    #[test]
+    fn coinciding_curves_are_named_dashed_and_bands_drawn() {
+        let a = Series::new("A", vec![(0.0, 1.0), (1.0, 2.0)]);
+        let b = Series::new("B", vec![(0.0, 1.0005), (1.0, 2.0)]);
+        let c = Series::new("C", vec![(0.0, 1.5), (1.0, 2.0)]);
+        let labels = line::legend_labels(&[a.clone(), b.clone(), c.clone()], 0.0, 0.01);
+        assert_eq!(labels[0], ("A".to_string(), false));
+        assert_eq!(labels[1], ("B (on A)".to_string(), true));
+        // Negative control: C leaves A by 0.5 > 0.01.
+        assert_eq!(labels[2], ("C".to_string(), false));
+
+        let (mean, band) =
+            mean_with_ci95(&[0.0, 1.0, 2.0], &[&[1.0, 2.0, 3.0], &[3.0, 4.0, 5.0]]).unwrap();
+        assert_eq!(mean, [2.0, 3.0, 4.0]);
+        assert_eq!(band.len(), 3);
+        for ((x, lo, hi), m) in band.iter().zip(&mean) {
+            assert!(lo < m && m < hi, "{x}: {lo} {m} {hi}");
+        }
+        let (_, one) = mean_with_ci95(&[0.0], &[&[1.0]]).unwrap();
+        assert!(one.is_empty());
+        assert!(mean_with_ci95(&[0.0, 1.0], &[&[1.0]]).is_err());
+
+        let p = dir().join("band.svg");
+        let plot = LinePlot::new("t", "time (s)", "error (m)")
+            .with_series(a)
+            .with_series(b)
+            .with_shade(0.2, 0.4)
+            .with_shade_label("DVL invalid")
+            .with_band(0, vec![(0.0, 0.5, 1.5), (1.0, 1.5, 2.5)]);
+        std::fs::create_dir_all(dir()).unwrap();
+        let svg = plot.render_svg(&p).unwrap();
+        for t in ["B (on A)", "DVL invalid", "band: 95 % CI of the mean"] {
+            assert!(has_text(&svg, t), "{t}");
+        }
+        assert!(svg.contains("<polygon"), "no band polygon");
     }
 }

@@ -4,6 +4,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
+use super::line::{Entry, Swatch, draw_legend, plot_width};
 use super::*;
 use crate::error::SimError;
 
@@ -83,8 +84,34 @@ impl PlanPlot {
         let (mut x0, mut x1) = padded(min_max(all().map(|p| p.0)).0, min_max(all().map(|p| p.0)).1);
         let (mut y0, mut y1) = padded(min_max(all().map(|p| p.1)).0, min_max(all().map(|p| p.1)).1);
         let (margin, title_h, xl, yl) = (12u32, 40u32, 45u32, 70u32);
+        // The legend in its own column right of the plan: it never covers a path or
+        // a beacon.
+        let labels = super::line::legend_labels(
+            &self.paths,
+            (x1 - x0) * 2.0 / f64::from(self.size.0),
+            (y1 - y0) * 2.0 / f64::from(self.size.1),
+        );
+        let mut entries: Vec<Entry> = labels
+            .iter()
+            .enumerate()
+            .map(|(k, (l, on))| Entry {
+                label: l.clone(),
+                swatch: if *on {
+                    Swatch::Dashed(series_color(k))
+                } else {
+                    Swatch::Line(series_color(k))
+                },
+            })
+            .collect();
+        for (k, m) in self.markers.iter().enumerate() {
+            entries.push(Entry {
+                label: m.name.clone(),
+                swatch: Swatch::Marker(series_color(self.paths.len() + k)),
+            });
+        }
+        let plot_w = plot_width(self.size.0, &entries);
         if self.equal_aspect {
-            let w = f64::from(self.size.0.saturating_sub(2 * margin + yl).max(1));
+            let w = f64::from(plot_w.saturating_sub(2 * margin + yl).max(1));
             let h = f64::from(self.size.1.saturating_sub(2 * margin + xl + title_h).max(1));
             let scale = ((x1 - x0) / w).max((y1 - y0) / h);
             let (cx, cy) = (0.5 * (x0 + x1), 0.5 * (y0 + y1));
@@ -93,6 +120,7 @@ impl PlanPlot {
         }
         render(path, self.size, |root| {
             let area = root.titled(&self.title, title_style(22)).map_err(de)?;
+            let (area, legend_area) = area.split_horizontally(plot_w);
             let mut chart = ChartBuilder::on(&area)
                 .margin(margin)
                 .x_label_area_size(xl)
@@ -108,34 +136,26 @@ impl PlanPlot {
                 .label_style((FONT, 15))
                 .draw()
                 .map_err(de)?;
-            for (k, s) in self.paths.iter().enumerate() {
-                let c = series_color(k);
-                chart
-                    .draw_series(LineSeries::new(s.points.iter().copied(), c.stroke_width(2)))
-                    .map_err(de)?
-                    .label(s.name.as_str())
-                    .legend(move |(x, y)| {
-                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                    });
+            // A path lying on an earlier one is dashed and named "B (on A)".
+            for (k, (s, (_, on))) in self.paths.iter().zip(&labels).enumerate() {
+                let style = series_color(k).stroke_width(2);
+                let pts = s.points.iter().copied();
+                if *on {
+                    chart
+                        .draw_series(DashedLineSeries::new(pts, 7, 7, style))
+                        .map_err(de)?;
+                } else {
+                    chart.draw_series(LineSeries::new(pts, style)).map_err(de)?;
+                }
             }
             for (k, s) in self.markers.iter().enumerate() {
-                let c = series_color(self.paths.len() + k);
-                let style = c.filled();
+                let style = series_color(self.paths.len() + k).filled();
                 chart
                     .draw_series(s.points.iter().map(|&p| TriangleMarker::new(p, 8, style)))
-                    .map_err(de)?
-                    .label(s.name.as_str())
-                    .legend(move |(x, y)| TriangleMarker::new((x + 10, y), 6, style));
+                    .map_err(de)?;
             }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font((FONT, 14))
-                .position(SeriesLabelPosition::UpperRight)
-                .draw()
-                .map_err(de)?;
-            Ok(())
+            let shade = RGBColor(120, 120, 120).mix(0.18).filled();
+            draw_legend(&legend_area, &entries, shade)
         })
     }
 }

@@ -1,7 +1,8 @@
 //! The front end of `fathom replay range-beacon|ins-dvl <dir>` on one's own log in
 //! fathom's CSV layout (`docs/own-data.md`): reads the settings and the log, runs
 //! the replay ([`crate::replay::range_beacon`], [`crate::replay::ins_dvl`]) and
-//! renders its outputs as texts: `report.md`, `summary.json`, `estimates.csv` (the
+//! renders its outputs as texts, written through the same safe output folder as
+//! `fathom run` ([`claim_output`], [`write_outputs`]): `report.md`, `summary.json`, `estimates.csv` (the
 //! estimates, and the truth when the log has it, at the recording instants) and
 //! `innovations.csv` (every tested measurement's innovation and NIS). With ground
 //! truth the report scores the position error; without, it shows the innovations'
@@ -20,6 +21,7 @@ use crate::SimError;
 use crate::data::layout::ins_dvl::InsDvlLog;
 use crate::data::layout::range_beacon::RangeBeaconLog;
 use crate::data::layout::{LogError, LogKind};
+use crate::driver::{OutDir, RunInfo};
 use crate::replay::consistency::NisSummary;
 use crate::replay::{ins_dvl, range_beacon};
 
@@ -129,24 +131,61 @@ pub fn replay_dir(
     }
 }
 
-/// Writes `files` into `out` (created if needed).
+/// Claims the output folder `out` before anything is computed, as `fathom run` does
+/// ([`OutDir::claim`]: a lock file, a folder holding files fathom did not write refused
+/// unless `force`, a fresh temporary folder beside it that proves it writable).
 ///
 /// # Errors
-/// [`SimError::Io`] naming the file.
-pub fn write_outputs(out: &Path, files: &[(&'static str, String)]) -> Result<(), SimError> {
-    let io = |action, path: PathBuf| {
-        move |source| SimError::Io {
-            action,
-            path,
-            source,
-        }
-    };
-    std::fs::create_dir_all(out).map_err(io("create directory", out.to_path_buf()))?;
+/// [`SimError::InvalidArgument`] naming `--out` (the user's); I/O errors.
+pub fn claim_output(out: &Path, force: bool) -> Result<OutDir, SimError> {
+    OutDir::claim(out, force)
+}
+
+/// Writes `files` into the claimed folder and moves it into place
+/// ([`OutDir::commit`]); `kind` and `settings` (the settings file as given) go into
+/// its `run_info.json`. Returns the final folder.
+///
+/// # Errors
+/// [`SimError::Io`] naming the file; a forced write whose new file has the name of
+/// one of the user's files.
+pub fn write_outputs(
+    claim: OutDir,
+    kind: LogKind,
+    settings: &str,
+    files: &[(&'static str, String)],
+    elapsed_s: f64,
+) -> Result<PathBuf, SimError> {
     for (name, text) in files {
-        let path = out.join(name);
-        std::fs::write(&path, text).map_err(io("write", path.clone()))?;
+        let path = claim.dir().join(name);
+        std::fs::write(&path, text).map_err(|source| SimError::Io {
+            action: "write",
+            path: path.clone(),
+            source,
+        })?;
     }
-    Ok(())
+    let out = claim.path().to_path_buf();
+    claim.commit(RunInfo {
+        fathom_version: env!("CARGO_PKG_VERSION").to_string(),
+        command: "replay".into(),
+        experiment: kind.name().to_string(),
+        scenario: settings.to_string(),
+        runs: None,
+        threads: None,
+        seed: None,
+        base_seed: None,
+        elapsed_s,
+        files: Vec::new(),
+    })?;
+    Ok(out)
+}
+
+/// The report's `## Methods` list: each method's name and what it is.
+fn methods_section(report: &mut String, methods: &[MethodSummary<'_>]) {
+    let _ = writeln!(report, "## Methods\n");
+    for m in methods {
+        let _ = writeln!(report, "- `{}`: {}", m.name, m.what);
+    }
+    report.push('\n');
 }
 
 /// One method's numbers in `summary.json`.
@@ -263,11 +302,7 @@ fn range_beacon_outputs(r: &range_beacon::RangeBeaconReplay, header: &str) -> Ow
         r.beacons.len(),
         r.times.len()
     );
-    let _ = writeln!(report, "## Methods\n");
-    for m in &methods {
-        let _ = writeln!(report, "- `{}`: {}", m.name, m.what);
-    }
-    report.push('\n');
+    methods_section(&mut report, &methods);
     if with_truth {
         let _ = writeln!(
             report,
@@ -461,11 +496,7 @@ fn ins_dvl_outputs(r: &ins_dvl::InsDvlReplay, header: &str) -> OwnReplay {
         r.times.len(),
         r.invalid_dvl_rows
     );
-    let _ = writeln!(report, "## Methods\n");
-    for m in &methods {
-        let _ = writeln!(report, "- `{}`: {}", m.name, m.what);
-    }
-    report.push('\n');
+    methods_section(&mut report, &methods);
     if with_truth {
         let _ = writeln!(
             report,

@@ -145,7 +145,7 @@ pub(super) fn analyse(
     layouts: &[(&[Vec<Vec<KeptStats>>], &BatchSums)],
     out: &mut Analysis,
 ) -> Result<(), SimError> {
-    let schemes = UpdateScheme::ALL;
+    let schemes = &checked.schemes;
     let mut table: Table = Vec::new();
     for (ci, case) in checked.cases.iter().enumerate() {
         let mut row_c = Vec::new();
@@ -179,9 +179,16 @@ pub(super) fn analyse(
     } else {
         String::new()
     };
-    claims(checked, &table, per_run, out)?;
+    let all = checked.schemes.len() == UpdateScheme::ALL.len();
+    if all {
+        claims(checked, &table, per_run, out)?;
+    }
     figures::write(checked, per_run, sums, out)?;
-    report::write(checked, &table, per_run, sums, &layout_tables, out);
+    if all {
+        report::write(checked, &table, per_run, sums, &layout_tables, out);
+    } else {
+        report::write_subset(checked, &table, &layout_tables, out);
+    }
     out.report(&smoothed);
     Ok(())
 }
@@ -201,7 +208,7 @@ fn smoothed_rows(
 ) -> Result<String, SimError> {
     let mut table = Vec::new();
     for (ci, case) in checked.cases.iter().enumerate() {
-        for (si, &scheme) in UpdateScheme::ALL.iter().enumerate() {
+        for (si, &scheme) in checked.schemes.iter().enumerate() {
             let sm: Vec<_> = per_run
                 .iter()
                 .map(|r| r[ci][si].smoothed.as_deref().copied())

@@ -2,7 +2,6 @@
 //! statistics, and the single-run figures of the figure run (paths, estimate versus
 //! truth, sample times).
 
-use fathom_estimators::schemes::UpdateScheme;
 use fathom_sensors::BeaconSuiteData;
 use fathom_traj::{Trajectory, velocity_command::VelocityCommandMotion};
 
@@ -22,7 +21,7 @@ pub(super) fn write(
     sums: &BatchSums,
     out: &mut Analysis,
 ) -> Result<(), SimError> {
-    let schemes = UpdateScheme::ALL;
+    let schemes = &checked.schemes;
     // Mean error vs time over runs, every case and scheme.
     let n_t = sums.cases[0][0].errors.len();
     let period = checked.cases[0].setup.settings.epoch_period;
@@ -130,7 +129,12 @@ pub(super) fn write(
     out.figure("path_depth.svg", &p)?;
 
     let (data, runs) = &detail.cases[main];
-    let sc = &runs[1];
+    // The single-run estimate figures show SC (or the first scheme run without it).
+    let fig = schemes
+        .iter()
+        .position(|s| s.short_name() == "SC")
+        .unwrap_or(0);
+    let (sc, fig_name) = (&runs[fig], schemes[fig].short_name());
     let truth_at = |t: f64| {
         detail
             .motion
@@ -143,7 +147,7 @@ pub(super) fn write(
     }
     let plan = PlanPlot::new(
         format!(
-            "SC estimate vs truth (case {MAIN_CASE}, run {})",
+            "{fig_name} estimate vs truth (case {MAIN_CASE}, run {})",
             checked.figure_run
         ),
         "east (m)",
@@ -157,13 +161,14 @@ pub(super) fn write(
             .collect(),
     ))
     .with_path(Series::new(
-        "SC estimate",
+        format!("{fig_name} estimate"),
         sc.estimates.iter().map(|x| (x[1], x[0])).collect(),
     ));
-    out.figure("sc_estimate_vs_truth_plan.svg", &plan)?;
+    let fig_file = fig_name.to_lowercase();
+    out.figure(&format!("{fig_file}_estimate_vs_truth_plan.svg"), &plan)?;
     let mut p = LinePlot::new(
         format!(
-            "SC estimate vs truth: depth (case {MAIN_CASE}, run {})",
+            "{fig_name} estimate vs truth: depth (case {MAIN_CASE}, run {})",
             checked.figure_run
         ),
         "time (s)",
@@ -178,14 +183,14 @@ pub(super) fn write(
             .collect(),
     ));
     p.series.push(Series::new(
-        "SC estimate",
+        format!("{fig_name} estimate"),
         sc.times
             .iter()
             .zip(&sc.estimates)
             .map(|(t, x)| (*t, x[2]))
             .collect(),
     ));
-    out.figure("sc_estimate_vs_truth_depth.svg", &p)?;
+    out.figure(&format!("{fig_file}_estimate_vs_truth_depth.svg"), &p)?;
     let mut p = LinePlot::new(
         format!(
             "3D position error vs time (case {MAIN_CASE}, run {})",

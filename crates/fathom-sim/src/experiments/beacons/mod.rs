@@ -67,6 +67,7 @@ impl Experiment for Beacons {
     const SEED_DOC: &'static str = "003_9d29f3a0492aaff3.txt";
     const DEFAULT_SCENARIO: &'static str = "scenarios/beacons.toml";
     const PRESET: &'static str = include_str!("../../../../../scenarios/beacons.toml");
+    const METHODS: &'static [&'static str] = &["AS", "SC", "SI"];
     const ABOUT: &'static str = "EKF range-beacon localization under the AS / SC / SI update schemes with chi-square gating (seed 003, Tables 12-14)";
 
     fn check(&self, scenario: &BeaconsScenario, file: &str) -> Result<Checked, SimError> {

@@ -1,7 +1,7 @@
 //! One `beacons` Monte Carlo run: the motion, the initial estimation error, and per
-//! case the sensor data and the three schemes' results.
+//! case the sensor data and the selected schemes' results (`methods`, default all three).
 
-use fathom_estimators::schemes::{ChannelCounts, UpdateScheme};
+use fathom_estimators::schemes::ChannelCounts;
 use fathom_sensors::{BeaconSuiteData, simulate_beacon_suite};
 use fathom_stats::RunStats;
 use fathom_traj::velocity_command::VelocityCommandMotion;
@@ -38,7 +38,8 @@ fn simulate_cases(
         let data = simulate_beacon_suite(&motion, &case.config, &mut case_rng)
             .map_err(|e| SimError::model(format!("sensor suite, case {}", case.name), e))?;
         let ev = events(&data, &case.setup.beacons);
-        let runs = UpdateScheme::ALL
+        let runs = checked
+            .schemes
             .iter()
             .map(|&s| run_scheme_on(&motion, &data, &ev, &case.setup, s, &initial_error))
             .collect::<Result<Vec<_>, _>>()?;

@@ -1,5 +1,6 @@
 //! The `beacons` scenario file: schema and check.
 
+use fathom_estimators::schemes::UpdateScheme;
 use fathom_sensors::{
     BeaconSuiteConfig, BeaconSuiteParams, NoiseSwitches, Timing, noise::OutlierParams,
 };
@@ -11,6 +12,7 @@ use super::MAIN_CASE;
 use super::filter::{EkfSettings, FilterSetup};
 use crate::SimError;
 use crate::experiments::common::{BeaconsToml, MotionToml, check_case_name};
+use crate::method_list::select_methods;
 use crate::scenario::{require_non_negative, require_positive};
 
 /// EKF range-beacon localization.
@@ -60,6 +62,13 @@ pub struct BeaconsScenario {
     /// Range: `true` or `false`. Default: `false`.
     #[serde(default)]
     pub smooth: bool,
+    /// The update schemes to run, report and plot (the paper's comparisons of the
+    /// schemes and its Tables 13-14 need all three and are left out otherwise, with a
+    /// note).
+    ///
+    /// Range: a list of `"AS"`, `"SC"`, `"SI"`. Default: all three.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub methods: Option<Vec<String>>,
 }
 
 /// `[timing]`: synchronous and asynchronous clocks (Tables 2-3).
@@ -249,6 +258,8 @@ pub struct Checked {
     pub(super) cases: Vec<Case>,
     /// `smooth`: RTS-smoothed rows beside the filtered ones.
     pub(super) smooth: bool,
+    /// `methods`: the schemes run, in [`UpdateScheme::ALL`] order.
+    pub(super) schemes: Vec<UpdateScheme>,
 }
 
 impl BeaconsScenario {
@@ -454,7 +465,19 @@ impl BeaconsScenario {
             });
         }
         let layouts = self.check_layouts(file, &cases, &settings, &motion)?;
+        let schemes = match &self.methods {
+            None => UpdateScheme::ALL.to_vec(),
+            Some(given) => {
+                let names = <super::Beacons as crate::experiment::Experiment>::METHODS;
+                let chosen = select_methods(file, "beacons", given, names)?;
+                UpdateScheme::ALL
+                    .into_iter()
+                    .filter(|s| chosen.iter().any(|c| c == s.short_name()))
+                    .collect()
+            }
+        };
         Ok(Checked {
+            schemes,
             smooth: self.smooth,
             runs,
             base_seed: self.base_seed,

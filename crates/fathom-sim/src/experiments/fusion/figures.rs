@@ -8,7 +8,7 @@ use super::sim::Method;
 use crate::SimError;
 use crate::experiment::Analysis;
 use crate::output::CsvCell;
-use crate::plot::{Histogram, LinePlot, PlanPlot, Series};
+use crate::plot::{Histogram, LinePlot, PlanPlot, Series, mean_with_ci95};
 
 /// The filters (methods that have a path and an error figure of their own).
 pub(super) const FILTERS: [Method; 7] = [
@@ -161,8 +161,15 @@ pub(super) fn write_all(
             format!("mean of {} runs", results.len()),
             xy(times, &mean3),
         ));
+        let per_run: Vec<&[f64]> = results
+            .iter()
+            .map(|r| r.output.err_3d[i].as_slice())
+            .collect();
+        let (_, band) = mean_with_ci95(times, &per_run)?;
+        ep = ep.with_band(1, band);
         ep.markers_x = cc.to_vec();
         ep.shaded_x = cc.iter().map(|c| (c - hw, c + hw)).collect();
+        ep.shaded_label = format!("course change ± {hw} s");
         out.figure(&format!("err3d_{}.svg", m.slug()), &ep)?;
 
         let pooled: Vec<f64> = results

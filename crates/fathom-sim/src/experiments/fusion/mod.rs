@@ -15,6 +15,7 @@ mod figures;
 mod report;
 pub mod scenario;
 pub mod sim;
+mod subset;
 
 use fathom_sensors::integrated::DvlDrParams;
 use fathom_traj::FusionMission;
@@ -72,6 +73,17 @@ impl Experiment for Fusion {
     const SEED_DOC: &'static str = "000_777a2c84247a6c44.txt";
     const DEFAULT_SCENARIO: &'static str = "scenarios/fusion.toml";
     const PRESET: &'static str = include_str!("../../../../../scenarios/fusion.toml");
+    const METHODS: &'static [&'static str] = &[
+        "MF",
+        "T2T",
+        "EFF",
+        "EFF-no-feedback",
+        "EFF-no-equalization",
+        "T2T-BC",
+        "T2T-CI",
+        "INS-only",
+        "DVL-DR",
+    ];
     const ABOUT: &'static str = "INS+DVL fusion: measurement fusion, track-to-track and the equalize-fuse-feedback filter on one UUV mission (seed 000, Tables 2-3)";
 
     fn check(&self, scenario: &FusionScenario, file: &str) -> Result<FusionSetup, SimError> {
@@ -125,6 +137,10 @@ impl Experiment for Fusion {
     }
 
     fn batches(&self, p: &Prepared) -> Vec<Batch> {
+        if !p.setup.all_methods() {
+            // A subset: the main batch only (module docs of `methods`).
+            return vec![Batch::new(Self::NAME, p.setup.runs)];
+        }
         let mut b = vec![
             Batch::new(Self::NAME, p.setup.runs),
             Batch::new(
@@ -155,7 +171,14 @@ impl Experiment for Fusion {
         rng: &mut ChaCha8Rng,
     ) -> Result<RunResult, SimError> {
         match batch {
-            0 => run_once(&p.setup, &p.setup.run, &p.mission, &Method::ALL, false, rng),
+            0 => run_once(
+                &p.setup,
+                &p.setup.run,
+                &p.mission,
+                &p.setup.methods,
+                false,
+                rng,
+            ),
             OTHER => run_once(&p.setup, &p.other, &p.mission, &Method::ALL, false, rng),
             _ => run_once(
                 &p.setup,
@@ -186,6 +209,21 @@ impl Experiment for Fusion {
         _folds: Vec<()>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
-        analysis::analyse(p, records, out)
+        if p.setup.all_methods() {
+            analysis::analyse(p, records, out)
+        } else {
+            subset::analyse(p, records, out)
+        }
+    }
+}
+
+#[cfg(test)]
+mod method_tests {
+    use super::*;
+
+    #[test]
+    fn the_accepted_methods_are_the_method_names() {
+        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        assert_eq!(names, Fusion::METHODS);
     }
 }

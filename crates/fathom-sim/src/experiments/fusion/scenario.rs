@@ -10,8 +10,9 @@ use rand_chacha::ChaCha8Rng;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::sim::{FilterTuning, Reading, RunConfig};
+use super::sim::{FilterTuning, Method, Reading, RunConfig};
 use crate::SimError;
+use crate::method_list::select_methods;
 use crate::scenario::{require_non_negative, require_positive};
 
 /// INS + DVL fusion architectures.
@@ -53,6 +54,15 @@ pub struct FusionScenario {
     pub analysis: AnalysisToml,
     /// Sweeps (not in the paper).
     pub sensitivity: SensitivityToml,
+    /// The methods to run, report and plot. With a subset only the main batch runs:
+    /// the paper's claims, the other `v_DVL` reading and the sensitivity sweeps
+    /// compare the methods and are left out (the report says so).
+    ///
+    /// Range: a list of `"MF"`, `"T2T"`, `"EFF"`, `"EFF-no-feedback"`,
+    /// `"EFF-no-equalization"`, `"T2T-BC"`, `"T2T-CI"`, `"INS-only"`, `"DVL-DR"`.
+    /// Default: all.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub methods: Option<Vec<String>>,
 }
 
 /// `[mission]`: the cubic-spline UUV mission (paper §4.1).
@@ -279,6 +289,8 @@ pub struct FusionSetup {
     pub sweep_dvl_noise: Vec<f64>,
     /// `v_DVL` sweep (unit of the reading).
     pub sweep_v_dvl: Vec<f64>,
+    /// `methods`: the methods run, in [`Method::ALL`] order.
+    pub methods: Vec<Method>,
 }
 
 fn sweep(file: &str, key: &str, values: &[f64]) -> Result<Vec<f64>, SimError> {
@@ -471,11 +483,27 @@ impl FusionScenario {
             sensitivity_runs: runs.div_ceil(4).clamp(2, s.runs),
             sweep_dvl_noise: sweep(file, "sensitivity.dvl_vel_noise_mps", &s.dvl_vel_noise_mps)?,
             sweep_v_dvl: sweep(file, "sensitivity.filter_v_dvl", &s.filter_v_dvl)?,
+            methods: match &self.methods {
+                None => Method::ALL.to_vec(),
+                Some(given) => {
+                    let names = <super::Fusion as crate::experiment::Experiment>::METHODS;
+                    let chosen = select_methods(file, "fusion", given, names)?;
+                    Method::ALL
+                        .into_iter()
+                        .filter(|m| chosen.iter().any(|c| c == m.name()))
+                        .collect()
+                }
+            },
         })
     }
 }
 
 impl FusionSetup {
+    /// Whether `methods` selects every method (the paper's full experiment).
+    pub fn all_methods(&self) -> bool {
+        self.methods.len() == Method::ALL.len()
+    }
+
     /// The mission (generated from the trajectory seed).
     ///
     /// # Errors

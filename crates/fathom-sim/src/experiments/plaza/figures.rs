@@ -131,8 +131,8 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
     let beacons = Series::new("beacons", r.beacons.iter().map(|b| (b.x, b.y)).collect());
     let mut plan = PlanPlot::new(
         format!("{}: estimated and true path", r.data_name),
-        "x [m]",
-        "y [m]",
+        "x (m)",
+        "y (m)",
     )
     .with_path(truth);
     for name in ["DR", "AS", "SC", "SI"] {
@@ -158,8 +158,8 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
     };
     let mut plot = LinePlot::new(
         format!("{}: 2D position error", r.data_name),
-        "time since start [s]",
-        "error [m]",
+        "time since start (s)",
+        "error (m)",
     );
     for name in ["DR", "AS", "SC", "SI"] {
         if let Some(m) = r.method(name) {
@@ -177,8 +177,8 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
     if !smoothed.is_empty() {
         let mut sp = LinePlot::new(
             format!("{}: filtered and RTS-smoothed 2D error", r.data_name),
-            "time since start [s]",
-            "error [m]",
+            "time since start (s)",
+            "error (m)",
         );
         for m in smoothed {
             sp = sp.with_series(err_series(m));
@@ -199,8 +199,8 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
     let base = r.settings.ablation_scheme.short_name();
     let mut ab = LinePlot::new(
         format!("Ablation ({base}): what the bias and outlier handling buy"),
-        "time since start [s]",
-        "error [m]",
+        "time since start (s)",
+        "error (m)",
     );
     for m in r
         .methods
@@ -216,8 +216,8 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
     let dmax = a.samples.iter().map(|s| s.1).fold(0.0, f64::max);
     let mut scatter = PlanPlot::new(
         "Range error against ground truth",
-        "true distance [m]",
-        "range - true distance [m]",
+        "true distance (m)",
+        "range - true distance (m)",
     )
     .with_path(Series::new(
         format!("LS fit {} + {} d", f(a.fit.0, 2), f(a.fit.1, 4)),
@@ -247,7 +247,7 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
     }
     let hist = Histogram::new(
         "Range error after the affine fit",
-        "residual [m]",
+        "residual (m)",
         "count",
         (0..=bins).map(|k| lo + k as f64 * w).collect(),
         counts,
@@ -259,30 +259,38 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
             .as_ref()
             .is_some_and(|v| v.calibration != Calibration::None)
     }) {
-        let mut cal = LinePlot::new(
-            format!("{base}: estimated range calibration"),
-            "time since start [s]",
-            "offset [m] / scale error [%]",
+        // Offset (m) and scale error (%) on axes of their own: one axis for both
+        // would mix units.
+        let cal = LinePlot::new(
+            format!("{base}: estimated range offset"),
+            "time since start (s)",
+            "offset o (m)",
         )
         .with_series(Series::new(
-            "offset o [m]",
+            "offset o",
             time.iter()
                 .zip(&m.calibration)
                 .step_by(step)
                 .map(|(t, c)| (*t, c[0]))
                 .collect(),
         ));
+        out.figure("calibration.svg", &cal)?;
         if m.variant.as_ref().map(|v| v.calibration) == Some(Calibration::Affine) {
-            cal = cal.with_series(Series::new(
-                "scale error s [%]",
+            let scale = LinePlot::new(
+                format!("{base}: estimated range scale error"),
+                "time since start (s)",
+                "scale error s (%)",
+            )
+            .with_series(Series::new(
+                "scale error s",
                 time.iter()
                     .zip(&m.calibration)
                     .step_by(step)
                     .map(|(t, c)| (*t, 100.0 * c[1]))
                     .collect(),
             ));
+            out.figure("calibration_scale.svg", &scale)?;
         }
-        out.figure("calibration.svg", &cal)?;
     }
     Ok(())
 }

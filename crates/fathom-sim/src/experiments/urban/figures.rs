@@ -153,6 +153,7 @@ pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Re
                     plot.series.push(Series::from_xy(m.name(), &time, &y)?);
                 }
                 plot.shaded_x.clone_from(&shade);
+                plot.shaded_label = format!("{} map-aided mode (run 0)", paired.name());
                 let file = ["pos", "vel", "att"][k];
                 out.figure(&format!("errors_{file}_{name}.svg"), &plot)?;
             }
@@ -313,6 +314,7 @@ fn run0_figures(
             .collect()
     };
     side.shaded_x = intervals(&dist, &shadow_flag);
+    side.shaded_label = "GNSS shadowed".to_string();
     out.figure(&format!("world_side_{name}.svg"), &side)?;
     for (m, est) in Method::ALL.iter().zip(&d.estimates) {
         let est: Vec<(f64, f64)> = est[..k.min(est.len())]

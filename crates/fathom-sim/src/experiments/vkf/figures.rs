@@ -6,7 +6,7 @@ use super::scenario::Checked;
 use super::sim::{ESKF, GATED, INS_DVL, METHODS, PINS, RunOutput, Shared, VKF};
 use crate::SimError;
 use crate::experiment::Analysis;
-use crate::plot::{LinePlot, PlanPlot, Series};
+use crate::plot::{LinePlot, PlanPlot, Series, mean_with_ci95};
 
 /// `y_range` as a builder step.
 trait WithYRange {
@@ -24,7 +24,7 @@ fn shade(mut p: LinePlot, invalid: &[(f64, f64)]) -> LinePlot {
     for &(a, b) in invalid {
         p = p.with_shade(a, b);
     }
-    p
+    p.with_shade_label("DVL invalid")
 }
 
 /// Adds every figure and CSV file to `out`.
@@ -244,7 +244,10 @@ pub(super) fn write(
     let tt: Vec<f64> = (0..runs[0].err_h[0].len()).map(|i| i as f64).collect();
     let means: Vec<Vec<f64>> = (0..METHODS.len()).map(|m| mean_series(runs, m)).collect();
     let mut all = LinePlot::new(
-        format!("horizontal error, mean of {} runs", runs.len()),
+        format!(
+            "horizontal error, mean of {} runs (zoom: horizontal_error_aided.svg)",
+            runs.len()
+        ),
         "time (s)",
         "horizontal error (m)",
     );
@@ -279,6 +282,9 @@ pub(super) fn write(
             "horizontal error (m)",
         )
         .with_series(Series::from_xy("mean", &tt, &means[m])?);
+        let per_run: Vec<&[f64]> = runs.iter().map(|r| r.err_h[m].as_slice()).collect();
+        let (_, band) = mean_with_ci95(&tt, &per_run)?;
+        p = p.with_band(0, band);
         for (i, r) in runs.iter().take(5).enumerate() {
             p = p.with_series(Series::from_xy(format!("run {i}"), &tt, &r.err_h[m])?);
         }
