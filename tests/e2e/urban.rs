@@ -198,6 +198,81 @@ fn user_obj_world_runs_end_to_end() {
         .unwrap();
     assert!(t >= 0.0);
     assert!(dir.join("o1").join("world_plan_block.svg").exists());
+    methods_select_the_methods_run(&dir, rows);
+}
+
+/// `methods = ["MGPMF", "INS-only"]`: only those run; their rows equal the full
+/// run's (`rows`, same seed) bit for bit, no other method has a row, no claim is
+/// made and the report says why; `fathom list` names what `urban` accepts.
+fn methods_select_the_methods_run(dir: &Path, full: &[serde_json::Value]) {
+    let text = block("block.obj", GOOD_PATH).replacen(
+        "\nruns = 2 ",
+        "\nmethods = [\"MGPMF\", \"INS-only\"]\nruns = 2 ",
+        1,
+    );
+    assert!(text.contains("methods = "), "the preset's runs line moved");
+    std::fs::write(dir.join("two.toml"), text).unwrap();
+    let ran = fathom(
+        dir,
+        &[
+            "run",
+            "two.toml",
+            "--out",
+            "two",
+            "--threads",
+            "2",
+            "--seed",
+            "7",
+        ],
+    );
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&dir.join("two"), "summary.json")).unwrap();
+    let rows = summary["rows"].as_array().unwrap();
+    let methods: std::collections::BTreeSet<&str> =
+        rows.iter().map(|r| r["method"].as_str().unwrap()).collect();
+    assert_eq!(
+        methods.into_iter().collect::<Vec<_>>(),
+        [
+            "block/GNSS",
+            "block/INS-only",
+            "block/MGPMF",
+            // The paired difference of two selected methods stays.
+            "block/MGPMF-vs-INS-only"
+        ]
+    );
+    for r in rows {
+        assert_eq!(
+            r,
+            row(
+                full,
+                r["method"].as_str().unwrap(),
+                r["metric"].as_str().unwrap()
+            )
+        );
+    }
+    assert_eq!(
+        summary["claims"].as_array().map_or(0, Vec::len),
+        0,
+        "{summary}"
+    );
+    let report = read(&dir.join("two"), "report.md");
+    assert!(
+        report.contains("`methods` selects 2 of the 6 methods (INS-only, MGPMF)"),
+        "{report}"
+    );
+    assert!(!report.contains("| GREKF"), "{report}");
+    let csv = read(&dir.join("two"), "mean_errors_block.csv");
+    assert!(
+        csv.starts_with("time_s,ins_only_err_3d_m,"),
+        "{}",
+        &csv[..80.min(csv.len())]
+    );
+    assert!(!csv.lines().next().unwrap().contains("grekf"));
+    let list = fathom(dir, &["list"]);
+    for w in ["\"GPS/INS-all-sats\"", "\"INS-DVL-gated\""] {
+        assert!(list.stdout.contains(w), "{w}: {}", list.stdout);
+    }
 }
 
 /// Path through the building, a waypoint outside the mesh, an OBJ without faces, a

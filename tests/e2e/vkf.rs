@@ -33,11 +33,17 @@ pub(crate) fn short_scenario() -> String {
     out
 }
 
-fn run(tag: &str, threads: usize) -> fathom_sim::output::Summary {
+/// Runs `text` as the `vkf` preset with 3 runs into a fresh folder; returns the
+/// results and the output folder.
+fn run_text(
+    tag: &str,
+    text: &str,
+    threads: usize,
+) -> (fathom_sim::PaperResult, std::path::PathBuf) {
     let root = std::env::temp_dir().join("fathom-e2e-vkf").join(tag);
     let _ = std::fs::remove_dir_all(&root);
     std::fs::create_dir_all(root.join("scenarios")).unwrap();
-    std::fs::write(root.join("scenarios/vkf.toml"), short_scenario()).unwrap();
+    std::fs::write(root.join("scenarios/vkf.toml"), text).unwrap();
     let options = PaperOptions {
         only: Some("vkf".into()),
         runs: Some(3),
@@ -48,7 +54,11 @@ fn run(tag: &str, threads: usize) -> fathom_sim::output::Summary {
     };
     let res = run_paper_to(&options, &registry(), &mut Vec::new()).unwrap();
     crate::support::assert_every_row_has_a_unit(&res.experiments[0]);
-    let dir = root.join("target/paper/vkf");
+    (res, root.join("target/paper/vkf"))
+}
+
+fn run(tag: &str, threads: usize) -> fathom_sim::output::Summary {
+    let (res, dir) = run_text(tag, &short_scenario(), threads);
     for f in [
         "summary.json",
         "report.md",
@@ -116,4 +126,33 @@ fn vkf_short_mission_writes_the_contract() {
     let vkf = s.row("VKF", "final_h").unwrap().value;
     assert!(vkf < ins_dvl, "VKF {vkf} m vs INS-DVL {ins_dvl} m");
     assert_eq!(s, run("t1", 1), "results depend on the thread count");
+    methods_select_the_methods_run(&s);
+}
+
+/// `methods = ["VKF", "PINS"]` runs the main batch of those two (the ESKF is not
+/// computed): their rows equal the full run's bit for bit (same streams), no other
+/// method has a row, no claim is made and the report says what was left out.
+fn methods_select_the_methods_run(full: &fathom_sim::output::Summary) {
+    let text =
+        short_scenario().replacen("\nruns = ", "\nmethods = [\"VKF\", \"PINS\"]\nruns = ", 1);
+    assert!(text.contains("methods = "), "the preset lost its runs line");
+    let (res, dir) = run_text("subset", &text, 2);
+    let s = &res.experiments[0].summary;
+    let methods: std::collections::BTreeSet<&str> =
+        s.rows.iter().map(|r| r.method.as_str()).collect();
+    assert_eq!(methods.into_iter().collect::<Vec<_>>(), ["PINS", "VKF"]);
+    for row in &s.rows {
+        assert_eq!(full.row(&row.method, &row.metric), Some(row), "{row:?}");
+    }
+    assert!(s.claims.is_empty(), "{:?}", s.claims);
+    let report = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    assert!(report.contains("Selected methods: PINS, VKF"), "{report}");
+    assert!(report.contains("literal-bias batch"), "{report}");
+    assert!(dir.join("horizontal_error_selected.svg").exists());
+    let csv = std::fs::read_to_string(dir.join("mean_horizontal_error.csv")).unwrap();
+    assert!(
+        csv.starts_with("time_s,pins_mean_err_h_m,vkf_mean_err_h_m\n"),
+        "{}",
+        &csv[..csv.len().min(200)]
+    );
 }

@@ -263,6 +263,15 @@ fn per_dof(n: NisSummary) -> NisSummary {
     }
 }
 
+/// The NIS summaries a method has, per degree of freedom, labelled.
+fn nis_list<const N: usize>(
+    all: [(&'static str, Option<NisSummary>); N],
+) -> Vec<(&'static str, NisSummary)> {
+    all.into_iter()
+        .filter_map(|(what, n)| n.map(|n| (what, per_dof(n))))
+        .collect()
+}
+
 fn range_beacon_outputs(r: &range_beacon::RangeBeaconReplay, header: &str) -> OwnReplay {
     let with_truth = r.truth.is_some();
     let error = if r.error_dims == 3 {
@@ -272,13 +281,7 @@ fn range_beacon_outputs(r: &range_beacon::RangeBeaconReplay, header: &str) -> Ow
     };
     let mut methods = Vec::new();
     for m in &r.methods {
-        let mut nis = Vec::new();
-        if let Some(n) = m.range_nis {
-            nis.push(("ranges", per_dof(n)));
-        }
-        if let Some(n) = m.depth_nis {
-            nis.push(("depth", per_dof(n)));
-        }
+        let nis = nis_list([("ranges", m.range_nis), ("depth", m.depth_nis)]);
         methods.push(MethodSummary {
             name: &m.spec.name,
             what: m.spec.describe(),
@@ -450,16 +453,11 @@ fn ins_dvl_outputs(r: &ins_dvl::InsDvlReplay, header: &str) -> OwnReplay {
     let with_truth = r.truth.is_some();
     let mut methods = Vec::new();
     for m in &r.methods {
-        let mut nis = Vec::new();
-        for (what, n) in [
+        let nis = nis_list([
             ("velocity", m.velocity_nis),
             ("DVL velocity", m.dvl_nis),
             ("depth", m.depth_nis),
-        ] {
-            if let Some(n) = n {
-                nis.push((what, per_dof(n)));
-            }
-        }
+        ]);
         let vel_rmse = m
             .vel_errors_h
             .as_deref()

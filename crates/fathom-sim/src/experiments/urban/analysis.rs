@@ -7,7 +7,6 @@ use fathom_stats::{mean_and_ci95, paired_mean_ci};
 
 use super::check::Checked;
 use super::claims::{DIFFERENCES, claims, diff_row, method_row};
-use super::nav::Method;
 use super::paper::paper_value;
 use super::record::{BatchFold, KeptRun};
 use super::trace::MethodStats;
@@ -40,10 +39,6 @@ fn diff(method: String, metric: &str, a: &[f64], b: &[f64]) -> Result<Row, SimEr
     Ok(Row::new(method, format!("diff_{metric}"), d.mean).with_ci95(lo, hi))
 }
 
-fn method_index(m: Method) -> usize {
-    Method::ALL.iter().position(|x| *x == m).unwrap_or(0)
-}
-
 /// Computes rows, claims, figures, CSV files and the report.
 pub(super) fn analyse(
     prep: &Prepared,
@@ -56,7 +51,7 @@ pub(super) fn analyse(
         return Err(SimError::invalid_argument("urban", "no main batch"));
     };
     for (s, spec) in c.scenes.iter().enumerate() {
-        for (m, method) in Method::ALL.iter().enumerate() {
+        for (m, method) in c.methods.iter().enumerate() {
             let name = method_row(&spec.name, *method);
             for (k, metric) in MethodStats::METRICS.iter().enumerate() {
                 let row = mean_row(&name, metric, &values(main, s, m, k))?
@@ -65,12 +60,16 @@ pub(super) fn analyse(
             }
         }
         for (a, b, metric) in DIFFERENCES {
+            // A difference needs both methods (`methods` may select fewer).
+            let (Some(ia), Some(ib)) = (c.index_of(a), c.index_of(b)) else {
+                continue;
+            };
             let k = metric_index(metric).unwrap_or(0);
             out.row(diff(
                 diff_row(&spec.name, a, b),
                 metric,
-                &values(main, s, method_index(a), k),
-                &values(main, s, method_index(b), k),
+                &values(main, s, ia, k),
+                &values(main, s, ib, k),
             )?);
         }
         let g = format!("{}/GNSS", spec.name);
@@ -89,7 +88,10 @@ pub(super) fn analyse(
     // runs of the same index
     for (b, a) in c.ablations.iter().enumerate() {
         let runs = &kept[b + 1];
-        let m = method_index(a.method);
+        // `check` keeps only the ablations of selected methods.
+        let Some(m) = c.index_of(a.method) else {
+            continue;
+        };
         let base = format!(
             "{}@{}",
             method_row(&c.scenes[a.scene].name, a.method),
@@ -106,8 +108,11 @@ pub(super) fn analyse(
             out.row(diff(format!("{base}-vs-main"), metric, &v, paired)?);
         }
     }
-    for claim in claims(out.rows(), c.table2_tolerance) {
-        out.claim(claim);
+    // The claims compare the methods: made only when every method ran.
+    if c.all_methods() {
+        for claim in claims(out.rows(), c.table2_tolerance) {
+            out.claim(claim);
+        }
     }
     per_run_csv(c, main, out)?;
     figures::write(prep, main_fold, out)?;
@@ -136,7 +141,7 @@ fn per_run_csv(c: &Checked, main: &[KeptRun], out: &mut Analysis) -> Result<(), 
     let mut records = Vec::new();
     for (i, run) in main.iter().enumerate() {
         for (s, spec) in c.scenes.iter().enumerate() {
-            for (m, method) in Method::ALL.iter().enumerate() {
+            for (m, method) in c.methods.iter().enumerate() {
                 let mut rec = vec![
                     CsvCell::Int(i as i64),
                     CsvCell::Text(spec.name.clone()),

@@ -23,6 +23,7 @@ use super::scenario::{
     Ranging, UrbanScenario,
 };
 use crate::SimError;
+use crate::method_list::select_methods;
 use crate::scenario::{
     require_experiment, require_in_range, require_non_negative, require_positive,
 };
@@ -179,6 +180,10 @@ pub struct Checked {
     pub file: String,
     /// Main-batch runs.
     pub runs: usize,
+    /// `methods`: the methods run, in [`Method::ALL`] order.
+    pub methods: Vec<Method>,
+    /// Ablations left out because their method is not in `methods`.
+    pub ablations_skipped: usize,
     /// Base seed.
     pub base_seed: u64,
     /// The quadrotor.
@@ -213,6 +218,18 @@ pub struct Checked {
     pub ablations: Vec<Ablation>,
     /// The settings the paper does not give, `(scenario key, value)`, for the report.
     pub unstated: Vec<(String, String)>,
+}
+
+impl Checked {
+    /// Whether `methods` selects every method (the paper's full experiment).
+    pub fn all_methods(&self) -> bool {
+        self.methods.len() == Method::ALL.len()
+    }
+
+    /// The index of `m` in the records of a run (its place in `methods`).
+    pub fn index_of(&self, m: Method) -> Option<usize> {
+        self.methods.iter().position(|x| *x == m)
+    }
 }
 
 pub(super) fn model_err(file: &str, key: &str, e: impl std::fmt::Display) -> SimError {
@@ -781,9 +798,24 @@ impl UrbanScenario {
                 format!("needs at least 2 runs, got {}", a.runs),
             ));
         }
+        let methods: Vec<Method> = match &self.methods {
+            None => Method::ALL.to_vec(),
+            Some(given) => {
+                let names = <super::Urban as crate::experiment::Experiment>::METHODS;
+                let chosen = select_methods(file, "urban", given, names)?;
+                Method::ALL
+                    .into_iter()
+                    .filter(|m| chosen.iter().any(|c| c == m.name()))
+                    .collect()
+            }
+        };
+        let before = ablations.len();
+        ablations.retain(|a: &Ablation| methods.contains(&a.method));
         Ok(Checked {
             file: file.to_string(),
             runs: self.runs,
+            ablations_skipped: before - ablations.len(),
+            methods,
             base_seed: self.base_seed,
             quad,
             rest_s,

@@ -93,10 +93,6 @@ fn paired_method(detail_ranging_is_lidar: bool) -> Method {
     }
 }
 
-fn method_index(m: Method) -> usize {
-    Method::ALL.iter().position(|x| *x == m).unwrap_or(0)
-}
-
 /// Writes the figures and the per-time CSV files.
 pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Result<(), SimError> {
     let c = &prep.checked;
@@ -111,7 +107,7 @@ pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Re
         let time: Vec<f64> = (1..=n).map(|k| c.rest_s + k as f64 * eval_dt).collect();
         let mut headers = vec!["time_s".to_string()];
         let mut cols: Vec<Vec<f64>> = vec![time.clone()];
-        for (m, (e3, ev, ea)) in Method::ALL.iter().zip(&means) {
+        for (m, (e3, ev, ea)) in c.methods.iter().zip(&means) {
             let slug = m.slug();
             headers.push(format!("{slug}_err_3d_m"));
             cols.push(e3[..n].to_vec());
@@ -125,8 +121,11 @@ pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Re
         out.csv_columns(&format!("mean_errors_{name}.csv"), &h, &cr)?;
         let detail = fold.detail.as_ref().and_then(|d| d.get(s));
         let paired = paired_method(matches!(spec.ranging, super::scenario::Ranging::Lidar));
+        // The paired method's map-aided intervals, when it ran (`methods`).
+        let paired_index = c.index_of(paired);
         let shade = detail
-            .map(|d| intervals(&d.times, &d.map_mode[method_index(paired)]))
+            .zip(paired_index)
+            .and_then(|(d, i)| d.map_mode.get(i).map(|mode| intervals(&d.times, mode)))
             .unwrap_or_default();
         if n > 1 {
             for (k, (what, unit)) in [
@@ -137,16 +136,17 @@ pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Re
             .iter()
             .enumerate()
             {
-                let mut plot = LinePlot::new(
+                let title = if paired_index.is_some() {
                     format!(
                         "{name}: mean {what} over {} runs (shaded: {} map-aided, run 0)",
                         c.runs,
                         paired.name()
-                    ),
-                    "time (s)",
-                    format!("{what} ({unit})"),
-                );
-                for (m, mm) in Method::ALL.iter().zip(&means) {
+                    )
+                } else {
+                    format!("{name}: mean {what} over {} runs", c.runs)
+                };
+                let mut plot = LinePlot::new(title, "time (s)", format!("{what} ({unit})"));
+                for (m, mm) in c.methods.iter().zip(&means) {
                     let y = [&mm.0, &mm.1, &mm.2][k];
                     // log-free view: clip diverged curves so the map-aided ones stay readable
                     let y: Vec<f64> = y[..n].iter().map(|v| v.min(clip(k))).collect();
@@ -159,7 +159,7 @@ pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Re
             }
         }
         let hist_hi = c.histogram.0;
-        for (m, mf) in Method::ALL.iter().zip(methods) {
+        for (m, mf) in c.methods.iter().zip(methods) {
             let bins = c.histogram.1;
             if mf.hist.len() != bins + 1 || mf.hist.iter().all(|h| *h == 0) {
                 continue;
@@ -181,7 +181,7 @@ pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Re
             out.figure(&format!("histogram_{name}_{}.svg", m.slug()), &plot)?;
         }
         if let Some(d) = detail {
-            run0_csv(name, d, out)?;
+            run0_csv(name, &c.methods, d, out)?;
             run0_figures(prep, s, d, out)?;
         }
     }
@@ -193,7 +193,12 @@ fn clip(k: usize) -> f64 {
     [20.0, 2.0, 5.0][k]
 }
 
-fn run0_csv(name: &str, d: &SceneDetail, out: &mut Analysis) -> Result<(), SimError> {
+fn run0_csv(
+    name: &str,
+    methods: &[Method],
+    d: &SceneDetail,
+    out: &mut Analysis,
+) -> Result<(), SimError> {
     let mut headers = vec![
         "time_s".to_string(),
         "true_n_m".into(),
@@ -205,7 +210,7 @@ fn run0_csv(name: &str, d: &SceneDetail, out: &mut Analysis) -> Result<(), SimEr
     for i in 0..3 {
         cols.push(d.truth[..k].iter().map(|p| p[i]).collect());
     }
-    for (m, (est, mode)) in Method::ALL.iter().zip(d.estimates.iter().zip(&d.map_mode)) {
+    for (m, (est, mode)) in methods.iter().zip(d.estimates.iter().zip(&d.map_mode)) {
         let slug = m.slug();
         for (i, a) in ["n", "e", "d"].iter().enumerate() {
             headers.push(format!("{slug}_est_{a}_m"));
@@ -316,7 +321,7 @@ fn run0_figures(
     side.shaded_x = intervals(&dist, &shadow_flag);
     side.shaded_label = "GNSS shadowed".to_string();
     out.figure(&format!("world_side_{name}.svg"), &side)?;
-    for (m, est) in Method::ALL.iter().zip(&d.estimates) {
+    for (m, est) in c.methods.iter().zip(&d.estimates) {
         let est: Vec<(f64, f64)> = est[..k.min(est.len())]
             .iter()
             .filter(|p| p[0] > lo[0] - 100.0 && p[0] < hi[0] + 100.0)

@@ -66,6 +66,14 @@ impl Experiment for Urban {
     const SEED_DOC: &'static str = "004_a46751abbc309235.txt";
     const DEFAULT_SCENARIO: &'static str = "scenarios/urban.toml";
     const PRESET: &'static str = include_str!("../../../../../scenarios/urban.toml");
+    const METHODS: &'static [&'static str] = &[
+        "INS-only",
+        "GPS/INS",
+        "GPS/INS-all-sats",
+        "GREKF",
+        "MGPMF",
+        "PF",
+    ];
     const ABOUT: &'static str = "map-aided quadrotor navigation under a bridge and around buildings: INS, GPS/INS with and without the LOS test, switching GREKF / MGPMF / particle filter (seed 004, Fig. 8-10, Table 2)";
 
     fn check(&self, scenario: &UrbanScenario, file: &str) -> Result<check::Checked, SimError> {
@@ -129,5 +137,17 @@ impl Experiment for Urban {
         out: &mut Analysis,
     ) -> Result<(), SimError> {
         analysis::analyse(prep, &kept, &folds, out)
+    }
+}
+
+#[cfg(test)]
+mod method_tests {
+    use super::*;
+    use crate::experiments::urban::nav::Method;
+
+    #[test]
+    fn the_accepted_methods_are_the_method_names() {
+        let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+        assert_eq!(names, Urban::METHODS);
     }
 }

@@ -95,7 +95,8 @@ pub(super) fn write(prep: &Prepared, main: &[KeptRun], out: &mut Analysis) {
         md.push_str(&format!("## Results: {}\n\n", spec.name));
         let mut headers = vec!["method"];
         headers.extend(TABLE.iter().map(|(m, _)| *m));
-        let t: Vec<Vec<String>> = Method::ALL
+        let t: Vec<Vec<String>> = c
+            .methods
             .iter()
             .map(|m| {
                 let name = method_row(&spec.name, *m);
@@ -125,7 +126,29 @@ pub(super) fn write(prep: &Prepared, main: &[KeptRun], out: &mut Analysis) {
         }
     }
     md.push_str("## Claims\n\n");
-    let verdicts = claims(&rows, c.table2_tolerance);
+    if !c.all_methods() {
+        let names: Vec<&str> = c.methods.iter().map(|m| m.name()).collect();
+        md.push_str(&format!(
+            "`methods` selects {} of the {} methods ({}): the paper's claims compare the \
+             methods and are not evaluated{}. The tables above are this run's own results.\n\n",
+            names.len(),
+            Method::ALL.len(),
+            names.join(", "),
+            if c.ablations_skipped > 0 {
+                format!(
+                    "; {} ablation(s) of methods not selected did not run",
+                    c.ablations_skipped
+                )
+            } else {
+                String::new()
+            }
+        ));
+    }
+    let verdicts = if c.all_methods() {
+        claims(&rows, c.table2_tolerance)
+    } else {
+        Vec::new()
+    };
     for cl in &verdicts {
         md.push_str(&format!(
             "- `{}` **{}**: {}\n",
@@ -139,7 +162,9 @@ pub(super) fn write(prep: &Prepared, main: &[KeptRun], out: &mut Analysis) {
         .filter(|c| !c.holds)
         .map(|c| c.id.as_str())
         .collect();
-    if failed.is_empty() {
+    if verdicts.is_empty() {
+        // No claim was evaluated (a subset of the methods, said above).
+    } else if failed.is_empty() {
         md.push_str("\nEvery claim holds in this run.\n\n");
     } else {
         md.push_str(&format!(
@@ -191,7 +216,7 @@ fn spread_text(prep: &Prepared, main: &[KeptRun]) -> String {
     );
     let mut t = Vec::new();
     for (s, spec) in c.scenes.iter().enumerate() {
-        for (m, method) in Method::ALL.iter().enumerate() {
+        for (m, method) in c.methods.iter().enumerate() {
             if main.is_empty() || main[0].len() <= s {
                 continue;
             }
@@ -221,6 +246,9 @@ fn spread_text(prep: &Prepared, main: &[KeptRun]) -> String {
 
 /// What the GNSS shadowing did to the GPS-only methods.
 fn shadowing_text(c: &super::check::Checked, rows: &[Row]) -> String {
+    if c.index_of(Method::GpsIns).is_none() || c.index_of(Method::GpsInsAllSats).is_none() {
+        return String::new();
+    }
     let mut md = String::from("## GNSS shadowing and the LOS test\n\n");
     for spec in &c.scenes {
         let n = &spec.name;

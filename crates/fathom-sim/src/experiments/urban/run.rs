@@ -338,7 +338,7 @@ pub(super) fn main_run(
         let mut methods = Vec::new();
         let mut traces = Vec::new();
         let mut grid = None;
-        for method in Method::ALL {
+        for &method in &prep.checked.methods {
             let grid_after = (detail && method == Method::Mgpmf).then_some(mid);
             let r = run_method(prep, &env, method, &flown, dx0, &streams, grid_after)?;
             methods.push(method_record(prep, method, &r)?);

@@ -20,7 +20,7 @@ impl WithYRange for LinePlot {
     }
 }
 
-fn shade(mut p: LinePlot, invalid: &[(f64, f64)]) -> LinePlot {
+pub(super) fn shade(mut p: LinePlot, invalid: &[(f64, f64)]) -> LinePlot {
     for &(a, b) in invalid {
         p = p.with_shade(a, b);
     }

@@ -10,7 +10,8 @@
 //!
 //! Files: `scenario` (schema and check), `sim` (the shared truth and one run),
 //! `analysis` (rows and claims), `figures`, `report`, `smoothed` (`smooth = true`:
-//! the RTS-smoothed VKF-aided filter and ESKF).
+//! the RTS-smoothed VKF-aided filter and ESKF), `subset` (the analysis of a run of
+//! some of the methods, `methods = [...]`).
 
 mod analysis;
 mod cost;
@@ -19,6 +20,7 @@ mod report;
 pub(crate) mod scenario;
 pub(crate) mod sim;
 mod smoothed;
+mod subset;
 
 use rand_chacha::ChaCha8Rng;
 
@@ -54,6 +56,7 @@ impl Experiment for Vkf {
     const SEED_DOC: &'static str = "002_cdb9d2284a7eb080.txt";
     const DEFAULT_SCENARIO: &'static str = "scenarios/vkf.toml";
     const PRESET: &'static str = include_str!("../../../../../scenarios/vkf.toml");
+    const METHODS: &'static [&'static str] = &sim::METHODS;
     const ABOUT: &'static str = "strapdown INS with DVL bottom-lock loss: pure INS vs INS-DVL vs the RPM velocity filter (seed 002)";
 
     fn check(&self, scenario: &VkfScenario, file: &str) -> Result<Checked, SimError> {
@@ -71,7 +74,8 @@ impl Experiment for Vkf {
 
     fn batches(&self, p: &Prepared) -> Vec<Batch> {
         let mut b = vec![Batch::new(Self::NAME, p.c.runs)];
-        if p.c.literal_bias_runs > 0 {
+        // A subset of the methods runs the main batch only (`methods` docs).
+        if p.c.literal_bias_runs > 0 && p.c.all_methods() {
             b.push(Batch::new("vkf: literal DVL bias", p.c.literal_bias_runs));
         }
         b
@@ -87,7 +91,8 @@ impl Experiment for Vkf {
         if batch == LITERAL {
             sim::one_run(&p.c, &p.shared, &p.c.dvl_literal, rng, false, false)
         } else {
-            sim::one_run(&p.c, &p.shared, &p.c.dvl, rng, index == 0, p.c.smooth)
+            let smooth = p.c.smooth && p.c.all_methods();
+            sim::one_run(&p.c, &p.shared, &p.c.dvl, rng, index == 0, smooth)
         }
     }
 
@@ -115,6 +120,10 @@ impl Experiment for Vkf {
             Vec::new()
         };
         let runs = records.swap_remove(0);
-        analysis::analyse(p, &runs, &literal, out)
+        if p.c.all_methods() {
+            analysis::analyse(p, &runs, &literal, out)
+        } else {
+            subset::analyse(p, &runs, out)
+        }
     }
 }

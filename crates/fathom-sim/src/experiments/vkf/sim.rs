@@ -253,6 +253,9 @@ pub fn one_run(
         nav[1].start_recording();
         eskf.start_recording();
     }
+    // The ESKF is the costly method: skipped when not selected (it draws nothing, so
+    // the other methods' results do not change).
+    let run_eskf = c.selected(ESKF) || smooth;
     let mut est_ba = Vector3::zeros();
     let mut est_bg = Vector3::zeros();
     let mut f_sum = Vector3::zeros();
@@ -294,17 +297,22 @@ pub fn one_run(
             }
 
             // ESKF INS with the fed-back IMU error estimates.
-            let corrected = ImuIncrement::new(inc.dt, dth - est_bg * inc.dt, dv - est_ba * inc.dt);
-            eskf_ins
-                .step(&corrected)
-                .map_err(|e| SimError::model(format!("ESKF INS at t = {t} s"), e))?;
-            f_sum += corrected.delta_v;
+            if run_eskf {
+                let corrected =
+                    ImuIncrement::new(inc.dt, dth - est_bg * inc.dt, dv - est_ba * inc.dt);
+                eskf_ins
+                    .step(&corrected)
+                    .map_err(|e| SimError::model(format!("ESKF INS at t = {t} s"), e))?;
+                f_sum += corrected.delta_v;
+            }
 
             if k % c.cov_every == 0 {
                 for f in &mut nav {
                     f.propagate_covariance()
                         .map_err(model_err("9-state covariance"))?;
                 }
+            }
+            if run_eskf && k % c.cov_every == 0 {
                 let st = eskf_ins.state();
                 let f_mean = f_sum / cov_dt;
                 f_sum = Vector3::zeros();
@@ -372,26 +380,28 @@ pub fn one_run(
             }
 
             // ESKF: same switching with its own attitude, then feedback.
-            let st = *eskf_ins.state();
-            let c_eskf = *st.nav_from_body.to_rotation_matrix().matrix();
-            let aid_e = c
-                .switch
-                .select(alt_meas, &reading.vel_in_nav, &r_dvl, rpm_speed, &c_eskf);
-            eskf.update_velocity(&st.vel_in_nav, &aid_e.vel_in_nav, &aid_e.cov, None)
-                .map_err(model_err("ESKF velocity update"))?;
-            eskf.update_depth(-st.h, depth, r_depth)
-                .map_err(model_err("ESKF depth update"))?;
-            let dx = eskf.take_correction().map_err(model_err("ESKF"))?;
-            let err = NavError {
-                pos_in_nav: dx.fixed_rows::<3>(es::POS).into_owned(),
-                vel_in_nav: dx.fixed_rows::<3>(es::VEL).into_owned(),
-                attitude: dx.fixed_rows::<3>(es::ATT).into_owned(),
-            };
-            eskf_ins
-                .set_state(em::correct_state(&st, &err))
-                .map_err(|e| SimError::model(format!("ESKF feedback at t = {t} s"), e))?;
-            est_ba += dx.fixed_rows::<3>(es::ACCEL_BIAS);
-            est_bg += dx.fixed_rows::<3>(es::GYRO_BIAS);
+            if run_eskf {
+                let st = *eskf_ins.state();
+                let c_eskf = *st.nav_from_body.to_rotation_matrix().matrix();
+                let aid_e =
+                    c.switch
+                        .select(alt_meas, &reading.vel_in_nav, &r_dvl, rpm_speed, &c_eskf);
+                eskf.update_velocity(&st.vel_in_nav, &aid_e.vel_in_nav, &aid_e.cov, None)
+                    .map_err(model_err("ESKF velocity update"))?;
+                eskf.update_depth(-st.h, depth, r_depth)
+                    .map_err(model_err("ESKF depth update"))?;
+                let dx = eskf.take_correction().map_err(model_err("ESKF"))?;
+                let err = NavError {
+                    pos_in_nav: dx.fixed_rows::<3>(es::POS).into_owned(),
+                    vel_in_nav: dx.fixed_rows::<3>(es::VEL).into_owned(),
+                    attitude: dx.fixed_rows::<3>(es::ATT).into_owned(),
+                };
+                eskf_ins
+                    .set_state(em::correct_state(&st, &err))
+                    .map_err(|e| SimError::model(format!("ESKF feedback at t = {t} s"), e))?;
+                est_ba += dx.fixed_rows::<3>(es::ACCEL_BIAS);
+                est_bg += dx.fixed_rows::<3>(es::GYRO_BIAS);
+            }
 
             if let Some(d) = detail.as_mut() {
                 let rpm_vel = c_pins * Vector3::new(rpm_speed.0, 0.0, 0.0);
@@ -427,7 +437,10 @@ pub fn one_run(
                 err_h[m].push((f.position() - sh.true_flat[k]).xy().norm());
                 err_v[m].push((f.velocity() - true_v).xy().norm());
             }
-            err_h[ESKF].push(geo(&eskf_ins.state().position()));
+            if run_eskf {
+                err_h[ESKF].push(geo(&eskf_ins.state().position()));
+                err_v[ESKF].push((eskf_ins.state().vel_in_nav - true_v).xy().norm());
+            }
             if let (Some(pn), Some(pe)) = (nav[1].forward_pass(), eskf.forward_pass()) {
                 marks.push((
                     pn.last_index(),
@@ -437,7 +450,6 @@ pub fn one_run(
                     sh.true_flat[k],
                 ));
             }
-            err_v[ESKF].push((eskf_ins.state().vel_in_nav - true_v).xy().norm());
             if let Some(d) = detail.as_mut() {
                 d.t1.push(t);
                 let flat = sh.true_flat[k];
@@ -451,7 +463,9 @@ pub fn one_run(
                     let p = f.position();
                     d.ne[1 + m].push((p.x, p.y));
                 }
-                d.ne[1 + ESKF].push(off(&eskf_ins.state().position()));
+                if run_eskf {
+                    d.ne[1 + ESKF].push(off(&eskf_ins.state().position()));
+                }
                 let te = truth.to_ins_state().euler().to_vector();
                 let pe = pins.state().euler().to_vector();
                 for i in 0..3 {
