@@ -254,22 +254,33 @@ pub(crate) fn failure(e: SimError) -> Failure {
     }
 }
 
-/// The settings text and its label: `--config` or the built-in preset. Checked here,
-/// so that a bad file is a usage error naming its key.
-fn load_settings(config: Option<&Path>) -> Result<(String, String), Failure> {
-    let (text, label) = match config {
-        None => (
-            <Plaza as Experiment>::PRESET.to_string(),
-            "built-in scenarios/plaza.toml".to_string(),
-        ),
+/// The text and label of a settings file: `config` if given (unreadable: a usage
+/// error), else the built-in `preset` labelled `preset_label`.
+pub(crate) fn settings_text(
+    config: Option<&Path>,
+    preset: &str,
+    preset_label: &str,
+) -> Result<(String, String), Failure> {
+    match config {
+        None => Ok((preset.to_string(), preset_label.to_string())),
         Some(path) => {
             let label = path.display().to_string();
             let text = std::fs::read_to_string(path)
                 .with_context(|| format!("cannot read settings file `{label}`"))
                 .map_err(Failure::Usage)?;
-            (text, label)
+            Ok((text, label))
         }
-    };
+    }
+}
+
+/// The settings text and its label: `--config` or the built-in preset. Checked here,
+/// so that a bad file is a usage error naming its key.
+fn load_settings(config: Option<&Path>) -> Result<(String, String), Failure> {
+    let (text, label) = settings_text(
+        config,
+        <Plaza as Experiment>::PRESET,
+        "built-in scenarios/plaza.toml",
+    )?;
     parse_settings(&text, &label).map_err(|e| Failure::Usage(anyhow!(e)))?;
     Ok((text, label))
 }

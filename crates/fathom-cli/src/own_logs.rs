@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 
-use anyhow::{Context, anyhow};
+use anyhow::anyhow;
 use clap::{Args, Subcommand};
 use fathom_sim::data::layout::convert::range_beacon_from_plaza;
 use fathom_sim::data::layout::ins_dvl::InsDvlLog;
@@ -16,7 +16,7 @@ use fathom_sim::replay::plaza::parse_settings;
 use fathom_sim::user_run::one_line;
 use fathom_sim::{Experiment, error_chain};
 
-use crate::Failure;
+use crate::{Failure, settings_text};
 
 #[derive(Debug, Args)]
 pub(crate) struct OwnArgs {
@@ -106,19 +106,11 @@ pub(crate) fn own_failure(e: OwnLogError) -> Failure {
 }
 
 pub(crate) fn replay_own(kind: LogKind, args: &OwnArgs) -> Result<String, Failure> {
-    let (text, label) = match &args.config {
-        None => (
-            preset(kind).to_string(),
-            format!("built-in scenarios/{}.toml", kind.name()),
-        ),
-        Some(path) => {
-            let label = path.display().to_string();
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read settings file `{label}`"))
-                .map_err(Failure::Usage)?;
-            (text, label)
-        }
-    };
+    let (text, label) = settings_text(
+        args.config.as_deref(),
+        preset(kind),
+        &format!("built-in scenarios/{}.toml", kind.name()),
+    )?;
     let out = args
         .out
         .clone()

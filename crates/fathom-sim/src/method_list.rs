@@ -94,6 +94,31 @@ pub fn select_methods(
         .collect())
 }
 
+/// The methods a scenario's `methods` key selects from `all` (the experiment's
+/// methods in report order, `name` giving each one's name): every one when the key
+/// is absent, else the named ones in `all`'s order ([`select_methods`]).
+///
+/// # Errors
+/// As [`select_methods`].
+pub fn select<T: Copy>(
+    file: &str,
+    experiment: &str,
+    given: Option<&[String]>,
+    all: &[T],
+    name: impl Fn(T) -> &'static str,
+) -> Result<Vec<T>, SimError> {
+    let Some(given) = given else {
+        return Ok(all.to_vec());
+    };
+    let names: Vec<&str> = all.iter().map(|&m| name(m)).collect();
+    let chosen = select_methods(file, experiment, given, &names)?;
+    Ok(all
+        .iter()
+        .copied()
+        .filter(|&m| chosen.iter().any(|c| c == name(m)))
+        .collect())
+}
+
 /// `accepted` as an owned list: the default of a `methods` key.
 pub fn all(accepted: &[&str]) -> Vec<String> {
     accepted.iter().map(|s| s.to_string()).collect()

@@ -133,7 +133,7 @@ impl HeatMap {
                     let ink = if t > 0.6 { BLACK } else { WHITE };
                     chart
                         .draw_series(std::iter::once(Text::new(
-                            format!("{v:.dec$}"),
+                            fixed_text(v, dec),
                             (c as f64 + 0.5, yt - 0.5),
                             text_style(16, HPos::Center, VPos::Center).color(&ink),
                         )))
@@ -160,6 +160,16 @@ impl HeatMap {
             }
             draw_color_bar(&bar, vmin, vmax, dec, &self.value_label)
         })
+    }
+}
+
+/// `v` with `dec` decimals, without the sign of a value that rounds to zero
+/// (`0.0000`, not `-0.0000`).
+fn fixed_text(v: f64, dec: usize) -> String {
+    let s = format!("{v:.dec$}");
+    match s.strip_prefix('-') {
+        Some(rest) if rest.chars().all(|c| c == '0' || c == '.') => rest.to_string(),
+        _ => s,
     }
 }
 
@@ -198,7 +208,7 @@ fn draw_color_bar(
             BLACK.stroke_width(1),
         ))
         .map_err(de)?;
-        bar.draw_text(&format!("{v:.dec$}"), &st, (right + 7, y))
+        bar.draw_text(&fixed_text(v, dec), &st, (right + 7, y))
             .map_err(de)?;
     }
     if !label.is_empty() {

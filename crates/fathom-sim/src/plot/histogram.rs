@@ -94,6 +94,8 @@ impl Histogram {
                 .light_line_style(RGBColor(235, 235, 235))
                 .axis_desc_style((FONT, 17))
                 .label_style((FONT, 15))
+                .x_label_formatter(&tick)
+                .y_label_formatter(&tick)
                 .draw()
                 .map_err(de)?;
             let fill = series_color(0).mix(0.75).filled();

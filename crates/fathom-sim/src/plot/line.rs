@@ -25,6 +25,8 @@ pub struct LinePlot {
     pub shaded_label: String,
     /// x positions of vertical marker lines.
     pub markers_x: Vec<f64>,
+    /// What the marker lines mean: their legend entry (none when empty).
+    pub markers_label: String,
     /// 95 % CI bands `(x, lo, hi)` of mean curves, each with the index of its series
     /// (drawn in its colour, named in the legend).
     pub bands: Vec<(usize, Band)>,
@@ -51,6 +53,7 @@ impl LinePlot {
             shaded_x: Vec::new(),
             shaded_label: "shaded: see caption".to_string(),
             markers_x: Vec::new(),
+            markers_label: String::new(),
             bands: Vec::new(),
             y_range: None,
             x_range: None,
@@ -74,6 +77,13 @@ impl LinePlot {
     pub fn with_shade_label(mut self, label: impl Into<String>) -> Self {
         self.shaded_label = label.into();
         self
+    }
+
+    /// The colour of series `k` (a band takes its series' colour).
+    fn color_of(&self, k: usize) -> RGBColor {
+        self.series
+            .get(k)
+            .map_or_else(|| series_color(k), |s| s.color_at(k))
     }
 
     /// Add the 95 % CI band `(x, lo, hi)` of series `series` (a mean curve); an empty
@@ -137,28 +147,23 @@ impl LinePlot {
             }
         };
         let labels = legend_labels(&self.series, 0.0, (y1 - y0) * 2.0 / f64::from(self.size.1));
-        let mut entries: Vec<Entry> = labels
-            .iter()
-            .enumerate()
-            .map(|(k, (l, on))| Entry {
-                label: l.clone(),
-                swatch: if *on {
-                    Swatch::Dashed(series_color(k))
-                } else {
-                    Swatch::Line(series_color(k))
-                },
-            })
-            .collect();
+        let mut entries = series_entries(&self.series, &labels);
         if !self.shaded_x.is_empty() {
             entries.push(Entry {
                 label: self.shaded_label.clone(),
                 swatch: Swatch::Shade,
             });
         }
+        if !self.markers_x.is_empty() && !self.markers_label.is_empty() {
+            entries.push(Entry {
+                label: self.markers_label.clone(),
+                swatch: Swatch::Line(MARKER_GREY),
+            });
+        }
         if let Some((k, _)) = self.bands.first() {
             entries.push(Entry {
                 label: "band: 95 % CI of the mean".to_string(),
-                swatch: Swatch::Band(series_color(*k)),
+                swatch: Swatch::Band(self.color_of(*k)),
             });
         }
         render(path, self.size, |root| {
@@ -180,6 +185,8 @@ impl LinePlot {
                 .light_line_style(RGBColor(235, 235, 235))
                 .axis_desc_style((FONT, 17))
                 .label_style((FONT, 15))
+                .x_label_formatter(&tick)
+                .y_label_formatter(&tick)
                 .draw()
                 .map_err(de)?;
             let shade = RGBColor(120, 120, 120).mix(0.18).filled();
@@ -190,7 +197,7 @@ impl LinePlot {
                         .map(|&(a, b)| Rectangle::new([(a.max(x0), y0), (b.min(x1), y1)], shade)),
                 )
                 .map_err(de)?;
-            let mark = RGBColor(60, 60, 60).mix(0.7).stroke_width(1);
+            let mark = MARKER_GREY.stroke_width(1);
             chart
                 .draw_series(
                     self.markers_x
@@ -204,13 +211,13 @@ impl LinePlot {
                 chart
                     .draw_series(std::iter::once(Polygon::new(
                         outline,
-                        series_color(*k).mix(0.25).filled(),
+                        self.color_of(*k).mix(0.25).filled(),
                     )))
                     .map_err(de)?;
             }
             // A series lying on an earlier one is dashed, so both stay visible.
             for (k, (s, (_, on))) in self.series.iter().zip(&labels).enumerate() {
-                let style = series_color(k).stroke_width(2);
+                let style = s.color_at(k).stroke_width(2);
                 let pts = s.points.iter().copied();
                 if *on {
                     chart
@@ -237,7 +244,17 @@ pub(super) enum Swatch {
     Band(RGBColor),
     /// A set of triangle markers.
     Marker(RGBColor),
+    /// A filled region (plan views: structures).
+    Area(RGBColor),
+    /// Highlighted stretches of a path (a wide translucent stroke under it).
+    Highlight(RGBColor),
 }
+
+/// Colour of the vertical marker lines.
+const MARKER_GREY: RGBColor = RGBColor(90, 90, 90);
+
+/// Width of a highlighted stretch, px.
+pub(super) const HIGHLIGHT_PX: u32 = 12;
 
 /// One legend entry.
 pub(super) struct Entry {
@@ -245,29 +262,64 @@ pub(super) struct Entry {
     pub(super) swatch: Swatch,
 }
 
+/// The legend entries of the series labelled by [`legend_labels`]: a line in the
+/// series' colour, dashed where it lies on an earlier one.
+pub(super) fn series_entries(series: &[Series], labels: &[(String, bool)]) -> Vec<Entry> {
+    series
+        .iter()
+        .zip(labels)
+        .enumerate()
+        .map(|(k, (s, (l, on)))| Entry {
+            label: l.clone(),
+            swatch: if *on {
+                Swatch::Dashed(s.color_at(k))
+            } else {
+                Swatch::Line(s.color_at(k))
+            },
+        })
+        .collect()
+}
+
 /// Legend labels: a series whose points all lie within `(tol_x, tol_y)` of an earlier
 /// one's (about two pixels: the curves coincide on the figure) is labelled
-/// `"B (on A)"` and flagged, so coinciding curves are named and drawn dashed.
+/// `"B (on A)"` and flagged, so coinciding curves are named and drawn dashed; one
+/// with at least [`MOSTLY_ON`] of its points there is `"B (mostly on A)"`.
 pub(super) fn legend_labels(series: &[Series], tol_x: f64, tol_y: f64) -> Vec<(String, bool)> {
+    // The share of `s`'s points within the tolerance of `e`'s (same length only).
+    let share_on = |e: &Series, s: &Series| -> f64 {
+        if e.points.len() != s.points.len() || s.points.is_empty() {
+            return 0.0;
+        }
+        let close = e
+            .points
+            .iter()
+            .zip(&s.points)
+            .filter(|(a, b)| (a.0 - b.0).abs() <= tol_x && (a.1 - b.1).abs() <= tol_y)
+            .count();
+        close as f64 / s.points.len() as f64
+    };
     series
         .iter()
         .enumerate()
         .map(|(k, s)| {
-            let same = series[..k].iter().find(|e| {
-                e.points.len() == s.points.len()
-                    && !s.points.is_empty()
-                    && e.points
-                        .iter()
-                        .zip(&s.points)
-                        .all(|(a, b)| (a.0 - b.0).abs() <= tol_x && (a.1 - b.1).abs() <= tol_y)
-            });
-            match same {
-                Some(e) => (format!("{} (on {})", s.name, e.name), true),
-                None => (s.name.clone(), false),
+            let best = series[..k]
+                .iter()
+                .map(|e| (e, share_on(e, s)))
+                .max_by(|a, b| a.1.total_cmp(&b.1));
+            match best {
+                Some((e, share)) if share >= 1.0 => (format!("{} (on {})", s.name, e.name), true),
+                Some((e, share)) if share >= MOSTLY_ON => {
+                    (format!("{} (mostly on {})", s.name, e.name), true)
+                }
+                _ => (s.name.clone(), false),
             }
         })
         .collect()
 }
+
+/// Share of a series' points lying on an earlier one above which it is drawn dashed
+/// and named "B (mostly on A)".
+const MOSTLY_ON: f64 = 0.8;
 
 /// Width of the plot column: the figure minus a legend column wide enough for the
 /// longest entry (about 8 px a character at 14 px).
@@ -313,6 +365,15 @@ pub(super) fn draw_legend(
                 .draw(&Rectangle::new(
                     [(4, y - 7), (26, y + 7)],
                     c.mix(0.25).filled(),
+                ))
+                .map_err(de)?,
+            Swatch::Area(c) => area
+                .draw(&Rectangle::new([(4, y - 7), (26, y + 7)], c.filled()))
+                .map_err(de)?,
+            Swatch::Highlight(c) => area
+                .draw(&PathElement::new(
+                    vec![(4, y), (26, y)],
+                    c.stroke_width(HIGHLIGHT_PX),
                 ))
                 .map_err(de)?,
         }

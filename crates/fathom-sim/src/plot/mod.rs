@@ -53,6 +53,9 @@ pub struct Series {
     pub name: String,
     /// The points, in drawing order.
     pub points: Vec<(f64, f64)>,
+    /// Palette index of its colour (default: its place in the plot), so that one
+    /// method keeps one colour across figures that show different subsets.
+    pub color: Option<usize>,
 }
 
 impl Series {
@@ -61,6 +64,7 @@ impl Series {
         Series {
             name: name.into(),
             points,
+            color: None,
         }
     }
 
@@ -79,7 +83,19 @@ impl Series {
         Ok(Series {
             name,
             points: xs.iter().copied().zip(ys.iter().copied()).collect(),
+            color: None,
         })
+    }
+
+    /// The series drawn in palette colour `k` ([`series_color`]) wherever it stands.
+    pub fn with_color(mut self, k: usize) -> Self {
+        self.color = Some(k);
+        self
+    }
+
+    /// Its colour when it is the `k`-th series of a plot.
+    pub(crate) fn color_at(&self, k: usize) -> RGBColor {
+        series_color(self.color.unwrap_or(k))
     }
 }
 
@@ -88,7 +104,8 @@ pub type Band = Vec<(f64, f64, f64)>;
 
 /// The per-x mean over runs and its 95 % CI band `(x, lo, hi)` (Student t over the
 /// runs at each x), for a mean curve drawn with its interval. Every run has one value
-/// per x; with fewer than two runs the band is empty.
+/// per x; with fewer than two runs the band is empty. Where every run's value is
+/// non-negative (an error norm) the band's lower edge is cut at 0.
 ///
 /// # Errors
 /// [`SimError::InvalidArgument`] if a run's length differs from `xs`.
@@ -109,10 +126,42 @@ pub fn mean_with_ci95(xs: &[f64], runs: &[&[f64]]) -> Result<(Vec<f64>, Band), S
         mean.push(m);
         if runs.len() >= 2 {
             let (_, [lo, hi]) = fathom_stats::mean_and_ci95(&column)?;
+            // A non-negative quantity (an error norm): the band stops at 0.
+            let lo = if column.iter().all(|&v| v >= 0.0) {
+                lo.max(0.0)
+            } else {
+                lo
+            };
             band.push((x, lo, hi));
         }
     }
     Ok((mean, band))
+}
+
+/// An axis tick label: integers without a decimal point (`200`, not `200.0`), other
+/// values with at most six decimals and no trailing zeros, tiny ones in scientific
+/// notation, and never `-0`.
+pub(crate) fn tick(v: &f64) -> String {
+    let v = *v;
+    if !v.is_finite() {
+        return format!("{v}");
+    }
+    if v == 0.0 {
+        return "0".to_string();
+    }
+    if v.abs() < 1e-4 {
+        return format!("{v:.2e}");
+    }
+    if (v - v.round()).abs() <= 1e-9 * v.abs().max(1.0) {
+        return format!("{}", v.round());
+    }
+    let s = format!("{v:.6}");
+    let s = s.trim_end_matches('0').trim_end_matches('.');
+    if s == "-0" {
+        "0".to_string()
+    } else {
+        s.to_string()
+    }
 }
 
 fn plot_err(path: &Path, reason: impl Into<String>) -> SimError {
@@ -476,6 +525,23 @@ mod tests {
     }
 
     #[test]
+    fn tick_labels_drop_needless_decimals() {
+        for (v, s) in [
+            (200.0, "200"),
+            (-0.0, "0"),
+            (1e-12, "1.00e-12"),
+            (0.1 + 0.2, "0.3"),
+            (0.00998, "0.00998"),
+            (-2.5, "-2.5"),
+            (3e-6, "3.00e-6"),
+        ] {
+            assert_eq!(tick(&v), s, "{v}");
+        }
+        // Negative control: a value that is not an integer keeps its decimals.
+        assert_ne!(tick(&200.5), "200");
+    }
+
+    #[test]
     fn coinciding_curves_are_named_dashed_and_bands_drawn() {
         let a = Series::new("A", vec![(0.0, 1.0), (1.0, 2.0)]);
         let b = Series::new("B", vec![(0.0, 1.0005), (1.0, 2.0)]);
@@ -485,6 +551,23 @@ mod tests {
         assert_eq!(labels[1], ("B (on A)".to_string(), true));
         // Negative control: C leaves A by 0.5 > 0.01.
         assert_eq!(labels[2], ("C".to_string(), false));
+        // Nine of ten points on D: "mostly on"; five of ten: not.
+        let d = Series::new("D", (0..10).map(|i| (f64::from(i), 0.0)).collect());
+        let e = Series::new(
+            "E",
+            (0..10)
+                .map(|i| (f64::from(i), if i == 9 { 1.0 } else { 0.0 }))
+                .collect(),
+        );
+        let f = Series::new(
+            "F",
+            (0..10)
+                .map(|i| (f64::from(i), if i < 5 { 1.0 } else { 0.0 }))
+                .collect(),
+        );
+        let labels = line::legend_labels(&[d, e, f], 0.0, 0.01);
+        assert_eq!(labels[1], ("E (mostly on D)".to_string(), true));
+        assert_eq!(labels[2], ("F".to_string(), false));
 
         let (mean, band) =
             mean_with_ci95(&[0.0, 1.0, 2.0], &[&[1.0, 2.0, 3.0], &[3.0, 4.0, 5.0]]).unwrap();

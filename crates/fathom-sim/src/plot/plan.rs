@@ -4,7 +4,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::line::{Entry, Swatch, draw_legend, plot_width};
+use super::line::{Entry, Swatch, draw_legend, plot_width, series_entries};
 use super::*;
 use crate::error::SimError;
 
@@ -24,6 +24,12 @@ pub struct PlanPlot {
     pub paths: Vec<Series>,
     /// Point sets drawn as markers with a legend entry each (beacons, fixes, ...).
     pub markers: Vec<Series>,
+    /// Filled regions drawn under everything else (structures): each point is the
+    /// centre of a filled cell of `cell = (width, height)` in data units.
+    pub areas: Vec<(Series, (f64, f64))>,
+    /// Stretches of a path to point out (e.g. GNSS-shadowed): each point is drawn as
+    /// a wide translucent stroke under the paths, so the paths stay visible.
+    pub highlights: Vec<Series>,
     /// Keep one metre per pixel on both axes (default `true`).
     pub equal_aspect: bool,
     /// Size in pixels.
@@ -43,6 +49,8 @@ impl PlanPlot {
             y_label: y_label.into(),
             paths: Vec::new(),
             markers: Vec::new(),
+            areas: Vec::new(),
+            highlights: Vec::new(),
             equal_aspect: true,
             size: (800, 800),
         }
@@ -60,14 +68,32 @@ impl PlanPlot {
         self
     }
 
+    /// Add a filled region: cells of size `cell` (data units) centred on the points.
+    pub fn with_area(mut self, s: Series, cell: (f64, f64)) -> Self {
+        self.areas.push((s, cell));
+        self
+    }
+
+    /// Add highlighted path points (drawn under the paths).
+    pub fn with_highlight(mut self, s: Series) -> Self {
+        self.highlights.push(s);
+        self
+    }
+
     /// Draw the plot into an SVG file.
     ///
     /// # Errors
     /// [`SimError::Plot`] if there is nothing to draw or data are empty / non-finite,
     /// [`SimError::Io`] on write failure.
     pub(crate) fn render_svg(&self, path: &Path) -> Result<String, SimError> {
-        if self.paths.is_empty() && self.markers.is_empty() {
-            return Err(plot_err(path, "no paths or markers to draw"));
+        if self.paths.is_empty() && self.markers.is_empty() && self.areas.is_empty() {
+            return Err(plot_err(path, "no paths, markers or areas to draw"));
+        }
+        let areas: Vec<Series> = self.areas.iter().map(|(s, _)| s.clone()).collect();
+        for set in [&areas, &self.highlights] {
+            if !set.is_empty() {
+                check_series(path, "area or highlight", set)?;
+            }
         }
         if !self.paths.is_empty() {
             check_series(path, "path", &self.paths)?;
@@ -79,6 +105,8 @@ impl PlanPlot {
             self.paths
                 .iter()
                 .chain(&self.markers)
+                .chain(&areas)
+                .chain(&self.highlights)
                 .flat_map(|s| s.points.iter().copied())
         };
         let (mut x0, mut x1) = padded(min_max(all().map(|p| p.0)).0, min_max(all().map(|p| p.0)).1);
@@ -91,18 +119,20 @@ impl PlanPlot {
             (x1 - x0) * 2.0 / f64::from(self.size.0),
             (y1 - y0) * 2.0 / f64::from(self.size.1),
         );
-        let mut entries: Vec<Entry> = labels
-            .iter()
-            .enumerate()
-            .map(|(k, (l, on))| Entry {
-                label: l.clone(),
-                swatch: if *on {
-                    Swatch::Dashed(series_color(k))
-                } else {
-                    Swatch::Line(series_color(k))
-                },
-            })
-            .collect();
+        let mut entries = Vec::new();
+        for (k, (a, _)) in self.areas.iter().enumerate() {
+            entries.push(Entry {
+                label: a.name.clone(),
+                swatch: Swatch::Area(area_color(k)),
+            });
+        }
+        for (k, h) in self.highlights.iter().enumerate() {
+            entries.push(Entry {
+                label: h.name.clone(),
+                swatch: Swatch::Highlight(highlight_color(k)),
+            });
+        }
+        entries.extend(series_entries(&self.paths, &labels));
         for (k, m) in self.markers.iter().enumerate() {
             entries.push(Entry {
                 label: m.name.clone(),
@@ -134,11 +164,32 @@ impl PlanPlot {
                 .light_line_style(RGBColor(235, 235, 235))
                 .axis_desc_style((FONT, 17))
                 .label_style((FONT, 15))
+                .x_label_formatter(&tick)
+                .y_label_formatter(&tick)
                 .draw()
                 .map_err(de)?;
+            // Areas, then highlights, under the paths and markers.
+            for (k, (s, (w, h))) in self.areas.iter().enumerate() {
+                let style = area_color(k).filled();
+                chart
+                    .draw_series(s.points.iter().map(|&(x, y)| {
+                        Rectangle::new(
+                            [(x - 0.5 * w, y - 0.5 * h), (x + 0.5 * w, y + 0.5 * h)],
+                            style,
+                        )
+                    }))
+                    .map_err(de)?;
+            }
+            for (k, s) in self.highlights.iter().enumerate() {
+                let style = highlight_color(k).filled();
+                let r = super::line::HIGHLIGHT_PX / 2;
+                chart
+                    .draw_series(s.points.iter().map(|&p| Circle::new(p, r, style)))
+                    .map_err(de)?;
+            }
             // A path lying on an earlier one is dashed and named "B (on A)".
             for (k, (s, (_, on))) in self.paths.iter().zip(&labels).enumerate() {
-                let style = series_color(k).stroke_width(2);
+                let style = s.color_at(k).stroke_width(2);
                 let pts = s.points.iter().copied();
                 if *on {
                     chart
@@ -158,4 +209,23 @@ impl PlanPlot {
             draw_legend(&legend_area, &entries, shade)
         })
     }
+}
+
+/// Fill colour of the `k`-th area set: light greys (structures look the same in
+/// every figure).
+fn area_color(k: usize) -> RGBColor {
+    const GREYS: [RGBColor; 3] = [
+        RGBColor(190, 190, 190),
+        RGBColor(150, 150, 150),
+        RGBColor(215, 215, 215),
+    ];
+    GREYS[k % GREYS.len()]
+}
+
+/// Colour of the `k`-th highlight set (pale red first: one meaning in every
+/// figure). Opaque and pale: overlapping points do not darken, the path on top
+/// stays visible.
+fn highlight_color(k: usize) -> RGBColor {
+    const COLORS: [RGBColor; 2] = [RGBColor(250, 185, 185), RGBColor(250, 215, 150)];
+    COLORS[k % COLORS.len()]
 }

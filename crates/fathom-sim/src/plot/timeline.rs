@@ -93,6 +93,7 @@ impl Timeline {
                 .light_line_style(RGBColor(235, 235, 235))
                 .axis_desc_style((FONT, 17))
                 .label_style((FONT, 15))
+                .x_label_formatter(&tick)
                 .draw()
                 .map_err(de)?;
             for (r, (name, times)) in self.rows.iter().enumerate() {

@@ -12,7 +12,7 @@ use super::MAIN_CASE;
 use super::filter::{EkfSettings, FilterSetup};
 use crate::SimError;
 use crate::experiments::common::{BeaconsToml, MotionToml, check_case_name};
-use crate::method_list::select_methods;
+use crate::method_list::select;
 use crate::scenario::{require_non_negative, require_positive};
 
 /// EKF range-beacon localization.
@@ -465,17 +465,13 @@ impl BeaconsScenario {
             });
         }
         let layouts = self.check_layouts(file, &cases, &settings, &motion)?;
-        let schemes = match &self.methods {
-            None => UpdateScheme::ALL.to_vec(),
-            Some(given) => {
-                let names = <super::Beacons as crate::experiment::Experiment>::METHODS;
-                let chosen = select_methods(file, "beacons", given, names)?;
-                UpdateScheme::ALL
-                    .into_iter()
-                    .filter(|s| chosen.iter().any(|c| c == s.short_name()))
-                    .collect()
-            }
-        };
+        let schemes = select(
+            file,
+            "beacons",
+            self.methods.as_deref(),
+            &UpdateScheme::ALL,
+            UpdateScheme::short_name,
+        )?;
         Ok(Checked {
             schemes,
             smooth: self.smooth,

@@ -178,6 +178,17 @@ pub(super) fn row_method(m: Method, reading: Reading, primary: Reading) -> Strin
     }
 }
 
+/// The unit of each metric of the rows.
+pub(super) const UNITS: [(&str, &str); 7] = [
+    ("mean_3d", "m"),
+    ("std_3d", "m"),
+    ("mean_2d", "m"),
+    ("std_2d", "m"),
+    ("turn_ratio_3d", "1"),
+    ("ins_integrator_mean_err", "m"),
+    ("ins_integrator_max_err", "m"),
+];
+
 /// Computes the rows, the claims, the extra keys, the figures and the report.
 pub(super) fn analyse(
     p: &Prepared,
@@ -189,15 +200,7 @@ pub(super) fn analyse(
     let other = std::mem::take(&mut records[super::OTHER]);
     let results = std::mem::take(&mut records[0]);
     let primary = setup.run.tuning.reading;
-    for (metric, unit) in [
-        ("mean_3d", "m"),
-        ("std_3d", "m"),
-        ("mean_2d", "m"),
-        ("std_2d", "m"),
-        ("turn_ratio_3d", "1"),
-        ("ins_integrator_mean_err", "m"),
-        ("ins_integrator_max_err", "m"),
-    ] {
+    for (metric, unit) in UNITS {
         out.unit(metric, unit);
     }
     // Run 0 again, keeping the paths for the figures (same stream: same numbers).

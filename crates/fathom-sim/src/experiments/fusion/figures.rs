@@ -4,7 +4,7 @@ use fathom_traj::{FusionMission, Trajectory};
 
 use super::analysis::{RunResult, SWEEP_METHODS, SweepResult};
 use super::scenario::FusionSetup;
-use super::sim::Method;
+use super::sim::{Method, Reading};
 use crate::SimError;
 use crate::experiment::Analysis;
 use crate::output::CsvCell;
@@ -91,6 +91,7 @@ pub(super) fn write_all(
     )
     .with_series(Series::new("depth", depth));
     dp.markers_x = cc.to_vec();
+    dp.markers_label = "course change".into();
     out.figure("mission_depth.svg", &dp)?;
 
     // --- Figs. 7-12: paths, errors, histograms per filter --------------------
@@ -133,7 +134,7 @@ pub(super) fn write_all(
         if !zoom_true.is_empty() {
             let mut zp = PlanPlot::new(
                 format!(
-                    "{}: path at t = {zc} +/- {zh} s (run 0, 1 s samples)",
+                    "{}: path at t = {zc} ± {zh} s (run 0, 1 s samples)",
                     m.name()
                 ),
                 "east (m)",
@@ -150,7 +151,7 @@ pub(super) fn write_all(
         let mean3 = mean_series(results, |r| &r.output.err_3d[i]);
         let mut ep = LinePlot::new(
             format!(
-                "{}: 3D distance error (course changes marked, +/- {hw} s shaded)",
+                "{}: 3D distance error (course changes marked, ± {hw} s shaded)",
                 m.name()
             ),
             "time (s)",
@@ -215,6 +216,8 @@ pub(super) fn write_all(
     }
     p2.markers_x = cc.to_vec();
     p3.markers_x = cc.to_vec();
+    p2.markers_label = "course change".into();
+    p3.markers_label = "course change".into();
     out.figure("err2d.svg", &p2)?;
     out.figure("err3d_all.svg", &p3)?;
 
@@ -243,9 +246,12 @@ pub(super) fn write_all(
     for s in sweeps {
         let mut plot = LinePlot::new(
             format!(
-                "sensitivity: mean 3D error vs {} ({} reading, {} runs per value)",
+                "mean 3D error vs {} ({} reading, {} runs each)",
                 s.label,
-                s.reading.name(),
+                match s.reading {
+                    Reading::BarShalom => "Bar-Shalom",
+                    Reading::AsPrinted => "as-printed",
+                },
                 setup.sensitivity_runs
             ),
             format!("log10 {}", s.label),

@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 
 use super::sim::{FilterTuning, Method, Reading, RunConfig};
 use crate::SimError;
-use crate::method_list::select_methods;
+use crate::method_list::select;
 use crate::scenario::{require_non_negative, require_positive};
 
 /// INS + DVL fusion architectures.
@@ -483,17 +483,13 @@ impl FusionScenario {
             sensitivity_runs: runs.div_ceil(4).clamp(2, s.runs),
             sweep_dvl_noise: sweep(file, "sensitivity.dvl_vel_noise_mps", &s.dvl_vel_noise_mps)?,
             sweep_v_dvl: sweep(file, "sensitivity.filter_v_dvl", &s.filter_v_dvl)?,
-            methods: match &self.methods {
-                None => Method::ALL.to_vec(),
-                Some(given) => {
-                    let names = <super::Fusion as crate::experiment::Experiment>::METHODS;
-                    let chosen = select_methods(file, "fusion", given, names)?;
-                    Method::ALL
-                        .into_iter()
-                        .filter(|m| chosen.iter().any(|c| c == m.name()))
-                        .collect()
-                }
-            },
+            methods: select(
+                file,
+                "fusion",
+                self.methods.as_deref(),
+                &Method::ALL,
+                Method::name,
+            )?,
         })
     }
 }

@@ -7,7 +7,7 @@
 use fathom_stats::mean_and_ci95;
 
 use super::Prepared;
-use super::analysis::{METRICS, RunResult, paper_values, values};
+use super::analysis::{METRICS, RunResult, UNITS, paper_values, values};
 use super::figures::mean_series;
 use super::sim::Method;
 use crate::SimError;
@@ -23,15 +23,7 @@ pub(super) fn analyse(
 ) -> Result<(), SimError> {
     let setup = &p.setup;
     let results = records.first_mut().map(std::mem::take).unwrap_or_default();
-    for (metric, unit) in [
-        ("mean_3d", "m"),
-        ("std_3d", "m"),
-        ("mean_2d", "m"),
-        ("std_2d", "m"),
-        ("turn_ratio_3d", "1"),
-        ("ins_integrator_mean_err", "m"),
-        ("ins_integrator_max_err", "m"),
-    ] {
+    for (metric, unit) in UNITS {
         out.unit(metric, unit);
     }
     let mut table = Vec::new();
@@ -92,6 +84,7 @@ pub(super) fn analyse(
             cols.push(mean);
         }
         plot.markers_x = p.mission.course_changes().to_vec();
+        plot.markers_label = "course change".into();
         out.figure(&format!("err{dim}d_selected.svg"), &plot)?;
     }
     let h: Vec<&str> = headers.iter().map(String::as_str).collect();

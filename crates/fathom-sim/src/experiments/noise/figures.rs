@@ -26,7 +26,7 @@ fn matrix_rows(m: &DMatrix<f64>) -> Vec<Vec<f64>> {
 fn heat_map(title: String, rows: Vec<Vec<f64>>) -> HeatMap {
     let mut hm = HeatMap::new(title, labels(), labels(), rows);
     hm.decimals = 4;
-    hm.value_label = "m^2".into();
+    hm.value_label = "m²".into();
     hm
 }
 
@@ -46,7 +46,7 @@ pub(super) fn write(
             &format!("cov_{}.svg", case.name),
             &heat_map(
                 format!(
-                    "noise covariance, case {} (mean of {} runs, m^2)",
+                    "noise covariance, case {} (mean of {} runs, m²)",
                     case.name, checked.runs
                 ),
                 matrix_rows(&r.mean_cov),
@@ -55,7 +55,7 @@ pub(super) fn write(
         out.figure(
             &format!("cov_{}_design.svg", case.name),
             &heat_map(
-                format!("design covariance, case {} (m^2)", case.name),
+                format!("design covariance, case {} (m²)", case.name),
                 matrix_rows(&r.design),
             ),
         )?;
@@ -63,7 +63,7 @@ pub(super) fn write(
             out.figure(
                 &format!("cov_{}_paper.svg", case.name),
                 &heat_map(
-                    format!("paper's printed covariance, case {} (m^2)", case.name),
+                    format!("paper's printed covariance, case {} (m²)", case.name),
                     p.iter().map(|row| row.to_vec()).collect(),
                 ),
             )?;

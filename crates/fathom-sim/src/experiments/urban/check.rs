@@ -23,7 +23,7 @@ use super::scenario::{
     Ranging, UrbanScenario,
 };
 use crate::SimError;
-use crate::method_list::select_methods;
+use crate::method_list::select;
 use crate::scenario::{
     require_experiment, require_in_range, require_non_negative, require_positive,
 };
@@ -798,17 +798,13 @@ impl UrbanScenario {
                 format!("needs at least 2 runs, got {}", a.runs),
             ));
         }
-        let methods: Vec<Method> = match &self.methods {
-            None => Method::ALL.to_vec(),
-            Some(given) => {
-                let names = <super::Urban as crate::experiment::Experiment>::METHODS;
-                let chosen = select_methods(file, "urban", given, names)?;
-                Method::ALL
-                    .into_iter()
-                    .filter(|m| chosen.iter().any(|c| c == m.name()))
-                    .collect()
-            }
-        };
+        let methods = select(
+            file,
+            "urban",
+            self.methods.as_deref(),
+            &Method::ALL,
+            Method::name,
+        )?;
         let before = ablations.len();
         ablations.retain(|a: &Ablation| methods.contains(&a.method));
         Ok(Checked {

@@ -51,6 +51,12 @@ pub(super) fn footprints(scene: &PreparedScene, lo: [f64; 2], hi: [f64; 2]) -> V
     out
 }
 
+/// The `(east, north)` size of one footprint cell of [`footprints`] over `lo ..= hi`.
+fn footprint_cell(lo: [f64; 2], hi: [f64; 2]) -> (f64, f64) {
+    let step = |a: usize| (hi[a] - lo[a]) / (PLAN_GRID - 1) as f64;
+    (step(1), step(0))
+}
+
 /// `(north, east)` bounds of the truth with the plan margin.
 fn plan_bounds(truth: &[[f64; 3]]) -> ([f64; 2], [f64; 2]) {
     let mut lo = [f64::INFINITY; 2];
@@ -127,6 +133,11 @@ pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Re
             .zip(paired_index)
             .and_then(|(d, i)| d.map_mode.get(i).map(|mode| intervals(&d.times, mode)))
             .unwrap_or_default();
+        // Map-aided over (nearly) the whole flight: said in the title instead of a
+        // shading that covers the plot.
+        let span = time.last().copied().unwrap_or(0.0) - time.first().copied().unwrap_or(0.0);
+        let covered: f64 = shade.iter().map(|(a, b)| b - a).sum();
+        let throughout = span > 0.0 && covered >= 0.95 * span;
         if n > 1 {
             for (k, (what, unit)) in [
                 ("3-D position error", "m"),
@@ -136,24 +147,29 @@ pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Re
             .iter()
             .enumerate()
             {
-                let title = if paired_index.is_some() {
-                    format!(
-                        "{name}: mean {what} over {} runs (shaded: {} map-aided, run 0)",
-                        c.runs,
-                        paired.name()
-                    )
-                } else {
-                    format!("{name}: mean {what} over {} runs", c.runs)
-                };
+                // Diverged curves are cut at a cap so the map-aided ones stay
+                // readable; the title says so when a curve reaches it.
+                let cap = clip(k);
+                let capped = means
+                    .iter()
+                    .any(|mm| [&mm.0, &mm.1, &mm.2][k][..n].iter().any(|v| *v > cap));
+                let mut title = format!("{name}: mean {what} over {} runs", c.runs);
+                if capped {
+                    title.push_str(&format!(", cut at {cap} {unit}"));
+                }
+                if paired_index.is_some() && throughout {
+                    title.push_str(&format!("; {} map-aided throughout (run 0)", paired.name()));
+                }
                 let mut plot = LinePlot::new(title, "time (s)", format!("{what} ({unit})"));
                 for (m, mm) in c.methods.iter().zip(&means) {
                     let y = [&mm.0, &mm.1, &mm.2][k];
-                    // log-free view: clip diverged curves so the map-aided ones stay readable
-                    let y: Vec<f64> = y[..n].iter().map(|v| v.min(clip(k))).collect();
+                    let y: Vec<f64> = y[..n].iter().map(|v| v.min(cap)).collect();
                     plot.series.push(Series::from_xy(m.name(), &time, &y)?);
                 }
-                plot.shaded_x.clone_from(&shade);
-                plot.shaded_label = format!("{} map-aided mode (run 0)", paired.name());
+                if !throughout {
+                    plot.shaded_x.clone_from(&shade);
+                    plot.shaded_label = format!("{} map-aided mode (run 0)", paired.name());
+                }
                 let file = ["pos", "vel", "att"][k];
                 out.figure(&format!("errors_{file}_{name}.svg"), &plot)?;
             }
@@ -256,16 +272,20 @@ fn run0_figures(
             shadowed.push((p[1], p[0]));
         }
     }
+    // Structures and shadowed stretches under the paths, in fixed colours.
     let with_world = |plot: PlanPlot| {
         let plot = if structures.is_empty() {
             plot
         } else {
-            plot.with_markers(Series::new("structures", structures.clone()))
+            plot.with_area(
+                Series::new("structures", structures.clone()),
+                footprint_cell(lo, hi),
+            )
         };
         if shadowed.is_empty() {
             plot
         } else {
-            plot.with_markers(Series::new(
+            plot.with_highlight(Series::new(
                 format!("GNSS-shadowed (< {threshold} LOS satellites)"),
                 shadowed.clone(),
             ))
@@ -286,7 +306,7 @@ fn run0_figures(
     }
     let heights: Vec<f64> = truth.iter().map(|p| -p[2]).collect();
     let mut side = LinePlot::new(
-        format!("{name}: side view along the path (shaded: GNSS-shadowed)"),
+        format!("{name}: side view along the path"),
         "distance flown (m)",
         "height (m)",
     )
@@ -318,8 +338,15 @@ fn run0_figures(
             })
             .collect()
     };
-    side.shaded_x = intervals(&dist, &shadow_flag);
-    side.shaded_label = "GNSS shadowed".to_string();
+    let shadowed_x = intervals(&dist, &shadow_flag);
+    let total = dist.last().copied().unwrap_or(0.0);
+    if total > 0.0 && shadowed_x.iter().map(|(a, b)| b - a).sum::<f64>() >= 0.95 * total {
+        // Shadowed all along: said in the title, not by a shading over the plot.
+        side.title = format!("{name}: side view along the path (GNSS-shadowed all along)");
+    } else {
+        side.shaded_x = shadowed_x;
+        side.shaded_label = "GNSS-shadowed".to_string();
+    }
     out.figure(&format!("world_side_{name}.svg"), &side)?;
     for (m, est) in c.methods.iter().zip(&d.estimates) {
         let est: Vec<(f64, f64)> = est[..k.min(est.len())]
@@ -354,9 +381,16 @@ fn run0_figures(
         out.figure(&format!("los_satellites_{name}.svg"), &plot)?;
     }
     if let Some(scan) = d.scan.as_ref().filter(|s| !s.hits.is_empty()) {
-        let r = 45.0;
-        let slo = [scan.pos[0] - r, scan.pos[1] - r];
-        let shi = [scan.pos[0] + r, scan.pos[1] + r];
+        // The map around the vehicle and every return, with a margin.
+        let margin = 5.0;
+        let mut slo = [scan.pos[0] - margin, scan.pos[1] - margin];
+        let mut shi = [scan.pos[0] + margin, scan.pos[1] + margin];
+        for h in &scan.hits {
+            for a in 0..2 {
+                slo[a] = slo[a].min(h[a] - margin);
+                shi[a] = shi[a].max(h[a] + margin);
+            }
+        }
         let mut plot = PlanPlot::new(
             format!(
                 "{name}: one range scan over the map at t = {:.1} s (run 0)",
@@ -367,7 +401,7 @@ fn run0_figures(
         );
         let fp = footprints(scene, slo, shi);
         if !fp.is_empty() {
-            plot = plot.with_markers(Series::new("structures", fp));
+            plot = plot.with_area(Series::new("structures", fp), footprint_cell(slo, shi));
         }
         plot = plot
             .with_markers(Series::new(
@@ -378,17 +412,18 @@ fn run0_figures(
         out.figure(&format!("scan_{name}.svg"), &plot)?;
     }
     if let Some(grid) = d.grid.as_ref().filter(|g| !g.weights.is_empty()) {
+        // North up: the last grid row (largest north error) on top.
         let mut plot = HeatMap::new(
             format!(
-                "{name}: MGPMF grid weights (summed over yaw) at t = {:.1} s (run 0)",
+                "{name}: MGPMF weights (sum over yaw), rows north / columns east error (m), t = {:.1} s",
                 grid.time
             ),
-            grid.north.iter().map(|v| format!("{v:.2}")).collect(),
-            grid.east.iter().map(|v| format!("{v:.2}")).collect(),
-            grid.weights.clone(),
+            grid.north.iter().rev().map(|v| format!("{v:.3}")).collect(),
+            grid.east.iter().map(|v| format!("{v:.3}")).collect(),
+            grid.weights.iter().rev().cloned().collect(),
         );
         plot.decimals = 2;
-        plot.value_label = "weight (rows: north error m, columns: east error m)".into();
+        plot.value_label = "weight".into();
         plot.size = (1000, 900);
         out.figure(&format!("mgpmf_grid_{name}.svg"), &plot)?;
     }

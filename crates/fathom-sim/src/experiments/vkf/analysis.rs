@@ -127,6 +127,15 @@ fn paired(a: &[f64], b: &[f64]) -> Result<(f64, [f64; 2]), SimError> {
     Ok((m.mean, m.bounds()))
 }
 
+/// The unit of each per-method metric of the rows.
+pub(super) const METHOD_UNITS: [(&str, &str); 5] = [
+    ("final_h", "m"),
+    ("rms_h", "m"),
+    ("rms_vel", "m/s"),
+    ("final_h_median", "m"),
+    ("runs_final_h_beyond_threshold", "count"),
+];
+
 /// Computes the rows, the claims, the figures and the report.
 pub(super) fn analyse(
     p: &Prepared,
@@ -135,16 +144,11 @@ pub(super) fn analyse(
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let (c, shared) = (&p.c, &p.shared);
-    for (metric, unit) in [
-        ("final_h", "m"),
-        ("rms_h", "m"),
-        ("rms_vel", "m/s"),
-        ("final_h_median", "m"),
-        ("runs_final_h_beyond_threshold", "count"),
+    for (metric, unit) in METHOD_UNITS.into_iter().chain([
         ("growth_rate_invalid", "m/s"),
         ("growth_rate_valid", "m/s"),
         ("final_h_minus_default", "m"),
-    ] {
+    ]) {
         out.unit(metric, unit);
     }
 

@@ -27,6 +27,28 @@ pub(super) fn shade(mut p: LinePlot, invalid: &[(f64, f64)]) -> LinePlot {
     p.with_shade_label("DVL invalid")
 }
 
+/// Palette index of the truth in the plan views (grey).
+const TRUTH_COLOR: usize = 7;
+
+/// An angle series in degrees made continuous: each step of more than 180 deg is
+/// taken as a wrap and undone.
+fn unwrap_deg(v: &[f64]) -> Vec<f64> {
+    let mut out = Vec::with_capacity(v.len());
+    let mut offset = 0.0;
+    for (k, &a) in v.iter().enumerate() {
+        if k > 0 {
+            let step = a - v[k - 1];
+            if step > 180.0 {
+                offset -= 360.0;
+            } else if step < -180.0 {
+                offset += 360.0;
+            }
+        }
+        out.push(a + offset);
+    }
+    out
+}
+
 /// Adds every figure and CSV file to `out`.
 pub(super) fn write(
     c: &Checked,
@@ -42,6 +64,7 @@ pub(super) fn write(
         ));
     };
     let t1 = &d.t1;
+    // Truth grey, each method in its colour of the error figures.
     let ne = |k: usize| {
         Series::new(
             if k == 0 {
@@ -51,6 +74,7 @@ pub(super) fn write(
             },
             d.ne[k].iter().map(|&(n, e)| (e, n)).collect(),
         )
+        .with_color(if k == 0 { TRUTH_COLOR } else { k - 1 })
     };
     // Fig. 4: reference trajectory.
     out.figure(
@@ -83,25 +107,25 @@ pub(super) fn write(
     }
     out.figure("fig05_gyro.svg", &gyro)?;
     out.figure("fig05_accel.svg", &acc)?;
-    // Fig. 6: attitude.
+    // Fig. 6: attitude; yaw unwrapped (no jump line at +-180 deg).
     let names = ["roll", "pitch", "yaw"];
     let mut att = LinePlot::new(
-        "Fig. 6: attitude, truth and PINS (run 0)",
+        "Fig. 6: attitude, truth and PINS (run 0; yaw unwrapped)",
         "time (s)",
         "angle (deg)",
     );
     for i in 0..3 {
+        let (truth, pins) = if i == 2 {
+            (
+                unwrap_deg(&d.truth_euler_deg[i]),
+                unwrap_deg(&d.pins_euler_deg[i]),
+            )
+        } else {
+            (d.truth_euler_deg[i].clone(), d.pins_euler_deg[i].clone())
+        };
         att = att
-            .with_series(Series::from_xy(
-                format!("{} truth", names[i]),
-                t1,
-                &d.truth_euler_deg[i],
-            )?)
-            .with_series(Series::from_xy(
-                format!("{} PINS", names[i]),
-                t1,
-                &d.pins_euler_deg[i],
-            )?);
+            .with_series(Series::from_xy(format!("{} truth", names[i]), t1, &truth)?)
+            .with_series(Series::from_xy(format!("{} PINS", names[i]), t1, &pins)?);
     }
     out.figure("fig06_attitude.svg", &att)?;
     // Fig. 7: PINS vs truth.
@@ -231,7 +255,7 @@ pub(super) fn write(
     }
     out.figure("fig12_trajectories.svg", &plan)?;
     let mut plan = PlanPlot::new(
-        "Fig. 12 (aided methods only, run 0)",
+        "Fig. 12: trajectories of the aided methods (run 0)",
         "east (m)",
         "north (m)",
     );
@@ -263,8 +287,9 @@ pub(super) fn write(
         "time (s)",
         "horizontal error (m)",
     );
+    // Each method in its colour of `horizontal_error.svg`.
     for m in [INS_DVL, VKF, GATED, ESKF] {
-        aided = aided.with_series(Series::from_xy(METHODS[m], &tt, &means[m])?);
+        aided = aided.with_series(Series::from_xy(METHODS[m], &tt, &means[m])?.with_color(m));
     }
     let top = [VKF, GATED, ESKF]
         .iter()
@@ -277,7 +302,10 @@ pub(super) fn write(
     for (m, name) in METHODS.iter().enumerate() {
         let slug = name.to_lowercase().replace('-', "_");
         let mut p = LinePlot::new(
-            format!("{name}: horizontal error (mean and runs 0-4)"),
+            format!(
+                "{name}: horizontal error (mean and runs 0-{})",
+                runs.len().min(5) - 1
+            ),
             "time (s)",
             "horizontal error (m)",
         )
@@ -384,4 +412,20 @@ pub(super) fn write(
     let cols: Vec<&[f64]> = pr_cols.iter().map(Vec::as_slice).collect();
     out.csv_columns("per_run_metrics.csv", &h, &cols)?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::unwrap_deg;
+
+    #[test]
+    fn unwrap_removes_the_wrap_and_keeps_small_steps() {
+        assert_eq!(
+            unwrap_deg(&[170.0, 179.0, -179.0, -170.0]),
+            [170.0, 179.0, 181.0, 190.0]
+        );
+        assert_eq!(unwrap_deg(&[-170.0, 170.0]), [-170.0, -190.0]);
+        // Negative control: steps below 180 deg are kept as they are.
+        assert_eq!(unwrap_deg(&[0.0, 90.0, -80.0]), [0.0, 90.0, -80.0]);
+    }
 }

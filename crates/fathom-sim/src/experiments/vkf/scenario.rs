@@ -19,7 +19,7 @@ use serde::{Deserialize, Serialize};
 
 use super::sim::METHODS;
 use crate::SimError;
-use crate::method_list::select_methods;
+use crate::method_list::select;
 use crate::scenario::{require_in_range, require_non_negative, require_positive};
 
 /// Velocity-filter-aided INS.
@@ -695,15 +695,10 @@ impl VkfScenario {
                 "must be a whole multiple of the DVL rate (updates happen at covariance epochs)",
             ));
         }
-        let methods = match &self.methods {
-            None => (0..METHODS.len()).collect(),
-            Some(given) => {
-                let chosen = select_methods(file, "vkf", given, &METHODS)?;
-                (0..METHODS.len())
-                    .filter(|&m| chosen.iter().any(|c| c == METHODS[m]))
-                    .collect()
-            }
-        };
+        let indices: Vec<usize> = (0..METHODS.len()).collect();
+        let methods = select(file, "vkf", self.methods.as_deref(), &indices, |m| {
+            METHODS[m]
+        })?;
         Ok(Checked {
             methods,
             smooth: self.smooth,

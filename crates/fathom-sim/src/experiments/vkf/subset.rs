@@ -7,7 +7,7 @@
 use fathom_stats::{mean_and_ci95, median_ci};
 
 use super::Prepared;
-use super::analysis::{mean_series, metrics};
+use super::analysis::{METHOD_UNITS, mean_series, metrics};
 use super::figures::shade;
 use super::sim::{METHODS, RunOutput};
 use crate::SimError;
@@ -22,13 +22,7 @@ pub(super) fn analyse(
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let c = &p.c;
-    for (metric, unit) in [
-        ("final_h", "m"),
-        ("rms_h", "m"),
-        ("rms_vel", "m/s"),
-        ("final_h_median", "m"),
-        ("runs_final_h_beyond_threshold", "count"),
-    ] {
+    for (metric, unit) in METHOD_UNITS {
         out.unit(metric, unit);
     }
     let mut table = Vec::new();
