@@ -136,7 +136,7 @@ impl PlanPlot {
         for (k, m) in self.markers.iter().enumerate() {
             entries.push(Entry {
                 label: m.name.clone(),
-                swatch: Swatch::Marker(series_color(self.paths.len() + k)),
+                swatch: Swatch::Marker(m.color_at(self.paths.len() + k)),
             });
         }
         let plot_w = plot_width(self.size.0, &entries);
@@ -200,7 +200,7 @@ impl PlanPlot {
                 }
             }
             for (k, s) in self.markers.iter().enumerate() {
-                let style = series_color(self.paths.len() + k).filled();
+                let style = s.color_at(self.paths.len() + k).filled();
                 chart
                     .draw_series(s.points.iter().map(|&p| TriangleMarker::new(p, 8, style)))
                     .map_err(de)?;

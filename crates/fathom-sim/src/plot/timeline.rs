@@ -83,7 +83,11 @@ impl Timeline {
                 .margin(12)
                 .margin_left(margin_left)
                 .x_label_area_size(45)
-                .build_cartesian_2d(t0..t1, 0.0..n as f64)
+                // A little room beyond the window: a sample on its edge is drawn whole.
+                .build_cartesian_2d(
+                    t0 - 0.015 * (t1 - t0)..t1 + 0.015 * (t1 - t0),
+                    0.0..n as f64,
+                )
                 .map_err(de)?;
             chart
                 .configure_mesh()

@@ -142,9 +142,10 @@ pub(super) fn write_all(
             )
             .with_path(Series::new("true", zoom_true.clone()))
             .with_path(Series::new(m.name(), zoom_est.clone()));
+            // The samples in their path's colour.
             zp = zp
-                .with_markers(Series::new("true samples", zoom_true))
-                .with_markers(Series::new(format!("{} samples", m.name()), zoom_est));
+                .with_markers(Series::new("true samples", zoom_true).with_color(0))
+                .with_markers(Series::new(format!("{} samples", m.name()), zoom_est).with_color(1));
             out.figure(&format!("path_{}_zoom.svg", m.slug()), &zp)?;
         }
         let i = m.index();

@@ -198,7 +198,7 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
 
     let base = r.settings.ablation_scheme.short_name();
     let mut ab = LinePlot::new(
-        format!("Ablation ({base}): what the bias and outlier handling buy"),
+        format!("Ablation ({base}): error without the range-bias states or the robust gate"),
         "time since start (s)",
         "error (m)",
     );

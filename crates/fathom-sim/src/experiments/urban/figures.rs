@@ -184,9 +184,11 @@ pub(super) fn write(prep: &Prepared, fold: &BatchFold, out: &mut Analysis) -> Re
                 .map(|b| hist_hi * b as f64 / bins as f64)
                 .collect();
             let beyond = mf.hist[bins];
+            let total: u64 = mf.hist.iter().sum();
+            let pct = 100.0 * beyond as f64 / total.max(1) as f64;
             let plot = Histogram::new(
                 format!(
-                    "{name}/{}: 3-D position error, all runs and epochs ({beyond} beyond {hist_hi} m)",
+                    "{name}/{}: 3-D position error, {total} samples of all runs ({beyond} = {pct:.0} % beyond {hist_hi} m)",
                     m.name()
                 ),
                 "3-D position error (m)",
