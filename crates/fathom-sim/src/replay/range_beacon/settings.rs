@@ -260,9 +260,12 @@ impl MethodSpec {
         match &self.kind {
             MethodKind::DeadReckoning => "dead reckoning".into(),
             MethodKind::Ekf(v) => format!(
-                "EKF, {}, {} calibration, {}",
+                "EKF, {}, {}, {}",
                 v.scheme.short_name(),
-                v.calibration.name(),
+                match v.calibration {
+                    Calibration::None => "no range calibration".to_string(),
+                    c => format!("{} range calibration", c.name()),
+                },
                 match v.outliers {
                     OutlierHandling::Robust => "robust outlier handling".to_string(),
                     OutlierHandling::HardGate(g) => format!("gate at {g} σ"),
