@@ -215,18 +215,7 @@ impl LinePlot {
                     )))
                     .map_err(de)?;
             }
-            // A series lying on an earlier one is dashed, so both stay visible.
-            for (k, (s, (_, on))) in self.series.iter().zip(&labels).enumerate() {
-                let style = s.color_at(k).stroke_width(2);
-                let pts = s.points.iter().copied();
-                if *on {
-                    chart
-                        .draw_series(DashedLineSeries::new(pts, 7, 7, style))
-                        .map_err(de)?;
-                } else {
-                    chart.draw_series(LineSeries::new(pts, style)).map_err(de)?;
-                }
-            }
+            draw_lines(&mut chart, &self.series, &labels)?;
             draw_legend(&legend_area, &entries, shade)
         })
     }
@@ -260,6 +249,34 @@ pub(super) const HIGHLIGHT_PX: u32 = 12;
 pub(super) struct Entry {
     pub(super) label: String,
     pub(super) swatch: Swatch,
+}
+
+/// Draws `series` as lines in their colours; one that `labels` flags as lying on an
+/// earlier one is dashed, so both stay visible.
+pub(super) fn draw_lines<DB: DrawingBackend>(
+    chart: &mut ChartContext<
+        '_,
+        DB,
+        Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+    >,
+    series: &[Series],
+    labels: &[(String, bool)],
+) -> Result<(), String>
+where
+    DB::ErrorType: 'static,
+{
+    for (k, (s, (_, on))) in series.iter().zip(labels).enumerate() {
+        let style = s.color_at(k).stroke_width(2);
+        let pts = s.points.iter().copied();
+        if *on {
+            chart
+                .draw_series(DashedLineSeries::new(pts, 7, 7, style))
+                .map_err(de)?;
+        } else {
+            chart.draw_series(LineSeries::new(pts, style)).map_err(de)?;
+        }
+    }
+    Ok(())
 }
 
 /// The legend entries of the series labelled by [`legend_labels`]: a line in the

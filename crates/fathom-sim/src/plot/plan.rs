@@ -4,7 +4,7 @@ use std::path::Path;
 
 use plotters::prelude::*;
 
-use super::line::{Entry, Swatch, draw_legend, plot_width, series_entries};
+use super::line::{Entry, Swatch, draw_legend, draw_lines, plot_width, series_entries};
 use super::*;
 use crate::error::SimError;
 
@@ -188,17 +188,7 @@ impl PlanPlot {
                     .map_err(de)?;
             }
             // A path lying on an earlier one is dashed and named "B (on A)".
-            for (k, (s, (_, on))) in self.paths.iter().zip(&labels).enumerate() {
-                let style = s.color_at(k).stroke_width(2);
-                let pts = s.points.iter().copied();
-                if *on {
-                    chart
-                        .draw_series(DashedLineSeries::new(pts, 7, 7, style))
-                        .map_err(de)?;
-                } else {
-                    chart.draw_series(LineSeries::new(pts, style)).map_err(de)?;
-                }
-            }
+            draw_lines(&mut chart, &self.paths, &labels)?;
             for (k, s) in self.markers.iter().enumerate() {
                 let style = s.color_at(self.paths.len() + k).filled();
                 chart
