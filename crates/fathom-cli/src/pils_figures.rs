@@ -41,38 +41,22 @@ pub(crate) fn session_figures(series: &SimSeries, dir: &Path) -> Result<(), Fail
         .map(|s| s * 1e3)
         .filter(|v| v.is_finite())
         .collect();
-    if let Some(h) = histogram(&ms, "solution latency", "latency (ms)") {
-        h.write_svg(dir.join("latency.svg")).map_err(failure)?;
-    }
-    Ok(())
+    latency_histogram(&ms, "solution latency", &dir.join("latency.svg"))
 }
 
-/// A histogram of `values` (none for no values).
-fn histogram(values: &[f64], title: &str, x_label: &str) -> Option<Histogram> {
-    if values.is_empty() {
-        return None;
+/// The histogram of the latencies `ms` into `path` (nothing for none).
+fn latency_histogram(ms: &[f64], title: &str, path: &Path) -> Result<(), Failure> {
+    if ms.is_empty() {
+        return Ok(());
     }
-    let lo = values.iter().copied().fold(f64::INFINITY, f64::min);
-    let hi = values.iter().copied().fold(f64::NEG_INFINITY, f64::max);
-    let (lo, hi) = if hi > lo {
-        (lo, hi)
-    } else {
-        (lo - 0.5, lo + 0.5)
-    };
-    let w = (hi - lo) / LATENCY_BINS as f64;
-    let edges: Vec<f64> = (0..=LATENCY_BINS).map(|i| lo + w * i as f64).collect();
-    let mut counts = vec![0.0; LATENCY_BINS];
-    for v in values {
-        let i = (((v - lo) / w) as usize).min(LATENCY_BINS - 1);
-        counts[i] += 1.0;
-    }
-    Some(Histogram::new(
-        format!("{title} ({} solutions)", values.len()),
-        x_label,
-        "count",
-        edges,
-        counts,
-    ))
+    Histogram::of_values(
+        format!("{title} ({} solutions)", ms.len()),
+        "latency (ms)",
+        ms,
+        LATENCY_BINS,
+    )
+    .and_then(|h| h.write_svg(path))
+    .map_err(failure)
 }
 
 /// `fathom pils compare`: run `run .. run + runs` of the file, each in lockstep on
@@ -299,13 +283,9 @@ fn write_study(
         plot.write_svg(dir.join("error_3d_lockstep_vs_realtime.svg"))
             .map_err(failure)?;
     }
-    if let Some(h) = histogram(
+    latency_histogram(
         latencies_ms,
         "realtime solution latency, all runs",
-        "latency (ms)",
-    ) {
-        h.write_svg(dir.join("latency_realtime.svg"))
-            .map_err(failure)?;
-    }
-    Ok(())
+        &dir.join("latency_realtime.svg"),
+    )
 }

@@ -43,6 +43,27 @@ impl Histogram {
         }
     }
 
+    /// The count histogram of `values` in `bins` equal bins over their range
+    /// ([`fathom_stats::Histogram::new`]); `y_label` is `"count"`.
+    ///
+    /// # Errors
+    /// [`SimError::Stats`] for no values, a non-finite value or `bins = 0`.
+    pub fn of_values(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        values: &[f64],
+        bins: usize,
+    ) -> Result<Self, SimError> {
+        let h = fathom_stats::Histogram::new(values, bins)?;
+        Ok(Histogram::new(
+            title,
+            x_label,
+            "count",
+            h.edges,
+            h.counts.iter().map(|&c| c as f64).collect(),
+        ))
+    }
+
     /// Draw the histogram into an SVG file.
     ///
     /// # Errors

@@ -525,6 +525,17 @@ mod tests {
     }
 
     #[test]
+    fn histogram_of_values_counts_every_value() {
+        let h = Histogram::of_values("t", "x (m)", &[1.0, 2.0, 2.0, 3.0], 2).unwrap();
+        assert_eq!(h.edges, [1.0, 2.0, 3.0]);
+        assert_eq!(h.counts.iter().sum::<f64>(), 4.0);
+        assert_eq!(h.y_label, "count");
+        // Negative controls: no values, a NaN.
+        assert!(Histogram::of_values("t", "x", &[], 2).is_err());
+        assert!(Histogram::of_values("t", "x", &[1.0, f64::NAN], 2).is_err());
+    }
+
+    #[test]
     fn tick_labels_drop_needless_decimals() {
         for (v, s) in [
             (200.0, "200"),
