@@ -4,8 +4,8 @@
 //!
 //! Run with `cargo run --release --example run_experiment` from the repository root.
 
+use fathom::experiments::registry;
 use fathom::sim::experiment::{Environment, Job};
-use fathom::sim::experiments::registry;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let beacons = registry()

@@ -18,9 +18,13 @@
 //! ```
 
 pub use fathom_core as core;
+pub use fathom_data as data;
 pub use fathom_estimators as estimators;
+pub use fathom_experiments as experiments;
 pub use fathom_ins as ins;
 pub use fathom_map as map;
+pub use fathom_replay as replay;
+pub use fathom_report as report;
 pub use fathom_sensors as sensors;
 pub use fathom_sim as sim;
 pub use fathom_stats as stats;

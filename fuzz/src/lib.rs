@@ -11,6 +11,11 @@
 //! beside each regression input.
 
 use fathom_core::{Material, RayCaster};
+use fathom_data::matv5::mat_v5_bytes;
+use fathom_data::plaza::{
+    BeaconSite, PlazaMat, RangeOrder, parse_mat, parse_odometry, parse_ranges,
+};
+use fathom_experiments::registry;
 use fathom_map::mesh::{MAX_COORD, is_degenerate};
 use fathom_map::{
     AxisConvention, BruteForceCaster, BvhCaster, ImportReport, ImportSettings, MapError,
@@ -18,11 +23,6 @@ use fathom_map::{
 };
 use fathom_sim::SimError;
 use fathom_sim::cost::Limits;
-use fathom_sim::data::matv5::mat_v5_bytes;
-use fathom_sim::data::plaza::{
-    BeaconSite, PlazaMat, RangeOrder, parse_mat, parse_odometry, parse_ranges,
-};
-use fathom_sim::experiments::registry;
 use fathom_sim::user_run::{check_scenario_text, one_line, peek_experiment};
 
 /// Target `scenario`: the bytes (lossy UTF-8) as a scenario file through

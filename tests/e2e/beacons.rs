@@ -2,8 +2,8 @@
 //! data (seed 003 sensor suite), with a negative control that must fail.
 
 use fathom::estimators::schemes::UpdateScheme;
+use fathom::experiments::beacons::{EkfSettings, FilterSetup, run_scheme};
 use fathom::sensors::simulate_beacon_suite;
-use fathom::sim::experiments::beacons::{EkfSettings, FilterSetup, run_scheme};
 use fathom::sim::montecarlo::run_rng;
 use fathom::stats::ChiSquareBounds;
 use fathom::traj::velocity_command::VelocityCommandMotion;

@@ -4,7 +4,7 @@
 
 use std::path::{Path, PathBuf};
 
-use fathom_sim::experiments::registry;
+use fathom_experiments::registry;
 use fathom_sim::user_run::{EXIT_USAGE, check_command};
 
 use crate::support::compare_snapshot;

@@ -3,9 +3,7 @@
 //! INS drifts far more than the DVL dead reckoning, and EFF's feedback keeps the INS
 //! integrator's error bounded.
 
-use fathom::sim::experiments::fusion::{
-    RunResult, run_once, scenario::FusionScenario, sim::Method,
-};
+use fathom::experiments::fusion::{RunResult, run_once, scenario::FusionScenario, sim::Method};
 use fathom::sim::montecarlo::try_run_monte_carlo;
 use fathom::sim::scenario::parse_toml;
 

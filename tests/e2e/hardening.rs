@@ -5,8 +5,8 @@
 //! as an error naming the scheme and the time, not a panic or NaN.
 
 use fathom::estimators::schemes::UpdateScheme;
+use fathom::experiments::beacons::{EkfSettings, FilterSetup, SchemeRun, run_scheme};
 use fathom::sensors::{BeaconSuiteData, simulate_beacon_suite};
-use fathom::sim::experiments::beacons::{EkfSettings, FilterSetup, SchemeRun, run_scheme};
 use fathom::sim::montecarlo::run_rng;
 use fathom::traj::velocity_command::VelocityCommandMotion;
 use nalgebra::{Vector3, Vector4};

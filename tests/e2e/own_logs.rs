@@ -7,7 +7,7 @@
 
 use std::path::Path;
 
-use fathom::sim::experiments::plaza::find_data_dir;
+use fathom::experiments::plaza::find_data_dir;
 
 use crate::support::{fathom, read, repo_root, scratch};
 

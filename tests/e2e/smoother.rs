@@ -5,10 +5,10 @@
 //! reduced `beacons` and `vkf` scenarios the smoothed rows with CIs are added and every
 //! filtered row stays as it was.
 
-use fathom::sim::experiments::plaza::{
+use fathom::experiments::plaza::{
     GTSAM_BATCH_M, MAIN_METHODS, SMOOTHED_TARGET_M, find_data_dir, smoothed_name,
 };
-use fathom::sim::replay::plaza::{PlazaReplay, parse_settings, replay};
+use fathom::replay::plaza::{PlazaReplay, parse_settings, replay};
 
 use crate::support::{preset, repo_root, run_experiment, scratch, write_scenario};
 
@@ -34,7 +34,7 @@ fn plaza_scenario(smooth: bool) -> Option<String> {
 
 fn replay_with(text: &str) -> PlazaReplay {
     let settings = parse_settings(text, "plaza.toml").unwrap();
-    let log = fathom::sim::data::plaza::PlazaLog::read_dir(
+    let log = fathom::data::plaza::PlazaLog::read_dir(
         std::path::Path::new(&settings.data_dir),
         settings.range_order,
     )
@@ -133,7 +133,7 @@ fn with_smooth(text: &str) -> String {
 }
 
 /// Runs experiment `name` from `text` in a scratch workspace; returns the summary.
-fn run_summary(tag: &str, name: &str, text: &str) -> fathom::sim::output::Summary {
+fn run_summary(tag: &str, name: &str, text: &str) -> fathom::report::output::Summary {
     let root = scratch(tag);
     write_scenario(&root, &format!("{name}.toml"), text);
     let result = run_experiment(&root, name, Some(2)).unwrap();
@@ -141,7 +141,10 @@ fn run_summary(tag: &str, name: &str, text: &str) -> fathom::sim::output::Summar
 }
 
 /// Every row of `off` is in `on` unchanged (smoothing only adds rows).
-fn filtered_rows_unchanged(off: &fathom::sim::output::Summary, on: &fathom::sim::output::Summary) {
+fn filtered_rows_unchanged(
+    off: &fathom::report::output::Summary,
+    on: &fathom::report::output::Summary,
+) {
     for row in &off.rows {
         assert_eq!(on.row(&row.method, &row.metric), Some(row), "{row:?}");
     }

@@ -49,7 +49,7 @@ pub fn run_experiment(
         force: false,
     };
     let mut sink = Vec::new();
-    run_paper_to(&options, &fathom::sim::experiments::registry(), &mut sink)
+    run_paper_to(&options, &fathom::experiments::registry(), &mut sink)
 }
 
 /// Every row of the experiment has a declared unit (the console and `report.md`

@@ -3,9 +3,10 @@
 //! rows and claims are present and finite, and results do not depend on the thread
 //! count.
 
+use fathom_experiments::registry;
+use fathom_report::output::read_summary_json;
+use fathom_sim::PaperOptions;
 use fathom_sim::driver::run_paper_to;
-use fathom_sim::experiments::registry;
-use fathom_sim::{PaperOptions, output::read_summary_json};
 
 pub(crate) fn short_scenario() -> String {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -57,7 +58,7 @@ fn run_text(
     (res, root.join("target/paper/vkf"))
 }
 
-fn run(tag: &str, threads: usize) -> fathom_sim::output::Summary {
+fn run(tag: &str, threads: usize) -> fathom_report::output::Summary {
     let (res, dir) = run_text(tag, &short_scenario(), threads);
     for f in [
         "summary.json",
@@ -132,7 +133,7 @@ fn vkf_short_mission_writes_the_contract() {
 /// `methods = ["VKF", "PINS"]` runs the main batch of those two (the ESKF is not
 /// computed): their rows equal the full run's bit for bit (same streams), no other
 /// method has a row, no claim is made and the report says what was left out.
-fn methods_select_the_methods_run(full: &fathom_sim::output::Summary) {
+fn methods_select_the_methods_run(full: &fathom_report::output::Summary) {
     let text =
         short_scenario().replacen("\nruns = ", "\nmethods = [\"VKF\", \"PINS\"]\nruns = ", 1);
     assert!(text.contains("methods = "), "the preset lost its runs line");

@@ -6,6 +6,7 @@
 //! `docs/performance.md`).
 
 mod bench;
+mod scenario_docs;
 #[cfg(test)]
 mod tidy;
 
@@ -186,7 +187,7 @@ fn paper(
         workspace_root: root,
         force,
     };
-    let result = run_paper(options, &fathom_sim::experiments::registry()).map_err(|e| {
+    let result = run_paper(options, &fathom_experiments::registry()).map_err(|e| {
         let code = if e.is_user_error() { 2 } else { 1 };
         (
             code,
@@ -204,7 +205,7 @@ fn paper(
 /// `cargo xtask codegen`: writes docs/scenarios.md.
 fn codegen() -> Result<()> {
     let path = workspace_root()?.join("docs").join("scenarios.md");
-    let text = fathom_sim::scenario_docs::render(&fathom_sim::experiments::registry());
+    let text = scenario_docs::render(&fathom_experiments::registry());
     std::fs::write(&path, text).with_context(|| format!("cannot write `{}`", path.display()))?;
     println!("wrote {}", path.display());
     Ok(())

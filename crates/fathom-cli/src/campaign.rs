@@ -4,9 +4,9 @@ use std::path::PathBuf;
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Subcommand};
+use fathom_experiments::registry;
 use fathom_sim::driver::campaign::{merge, run_shard, slurm_script};
 use fathom_sim::experiment::{Environment, Job, Shard};
-use fathom_sim::experiments::registry;
 use fathom_sim::user_run::{check_command, peek_experiment};
 
 use crate::{Failure, RunArgs, failure, progress_bar, run_hook};

@@ -79,18 +79,19 @@ use own_logs::{LogCmd, OwnArgs, log_cmd, replay_own};
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
+use fathom_data::layout::LogKind;
+use fathom_experiments::plaza::Plaza;
+use fathom_experiments::registry;
+use fathom_replay::plaza::parse_settings;
 use fathom_sim::cost::Limits;
-use fathom_sim::data::layout::LogKind;
 use fathom_sim::driver::{console_claims, console_rows, console_setup};
 use fathom_sim::experiment::{Environment, Job, Shard};
-use fathom_sim::experiments::plaza::Plaza;
 use fathom_sim::progress::{Progress, ProgressEvent};
-use fathom_sim::replay::plaza::parse_settings;
 use fathom_sim::user_run::{
     RunOptions, check_command_with, check_scenario_with, one_line, peek_experiment,
     run_scenario_text,
 };
-use fathom_sim::{Experiment, SimError, error_chain, experiments::registry};
+use fathom_sim::{Experiment, SimError, error_chain};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 #[derive(Debug, Parser)]
@@ -245,7 +246,8 @@ enum Failure {
 
 /// The one exit-code rule: [`SimError::is_user_error`] decides; the message is the
 /// whole cause chain on one line.
-pub(crate) fn failure(e: SimError) -> Failure {
+pub(crate) fn failure(e: impl Into<SimError>) -> Failure {
+    let e: SimError = e.into();
     let line = anyhow!(one_line(&error_chain(&e)));
     if e.is_user_error() {
         Failure::Usage(line)

@@ -4,15 +4,15 @@ use std::path::PathBuf;
 
 use anyhow::anyhow;
 use clap::{Args, Subcommand};
-use fathom_sim::data::layout::convert::range_beacon_from_plaza;
-use fathom_sim::data::layout::ins_dvl::InsDvlLog;
-use fathom_sim::data::layout::range_beacon::RangeBeaconLog;
-use fathom_sim::data::layout::{FileSet, LogKind, Manifest, write_log};
-use fathom_sim::data::plaza::PlazaLog;
-use fathom_sim::example_log::{ins_dvl_example, range_beacon_example};
-use fathom_sim::experiments::plaza::Plaza;
-use fathom_sim::replay::own_log::{OwnLogError, claim_output, preset, replay_dir, write_outputs};
-use fathom_sim::replay::plaza::parse_settings;
+use fathom_data::layout::convert::range_beacon_from_plaza;
+use fathom_data::layout::ins_dvl::InsDvlLog;
+use fathom_data::layout::range_beacon::RangeBeaconLog;
+use fathom_data::layout::{FileSet, LogKind, Manifest, write_log};
+use fathom_data::plaza::PlazaLog;
+use fathom_experiments::example_log::{ins_dvl_example, range_beacon_example};
+use fathom_experiments::plaza::Plaza;
+use fathom_replay::own_log::{OwnLogError, claim_output, preset, replay_dir, write_outputs};
+use fathom_replay::plaza::parse_settings;
 use fathom_sim::user_run::one_line;
 use fathom_sim::{Experiment, error_chain};
 

@@ -11,8 +11,8 @@ use fathom_pils::compare::{Comparison, RunPair, unit};
 use fathom_pils::faults::FaultParams;
 use fathom_pils::session::{Prepared, SimSeries};
 use fathom_pils::settings::{Pacing, Settings};
-use fathom_sim::output::{Row, Summary};
-use fathom_sim::plot::{Figure, Histogram, LinePlot, Series};
+use fathom_report::output::{Row, Summary};
+use fathom_report::plot::{Figure, Histogram, LinePlot, Series};
 
 use crate::pils::{both, claim, commit, prepare};
 use crate::{Failure, failure};
@@ -49,13 +49,15 @@ fn latency_histogram(ms: &[f64], title: &str, path: &Path) -> Result<(), Failure
     if ms.is_empty() {
         return Ok(());
     }
-    Histogram::of_values(
+    let counts = fathom_stats::Histogram::new(ms, LATENCY_BINS).map_err(failure)?;
+    Histogram::new(
         format!("{title} ({} solutions)", ms.len()),
         "latency (ms)",
-        ms,
-        LATENCY_BINS,
+        "count",
+        counts.edges,
+        counts.counts.iter().map(|&c| c as f64).collect(),
     )
-    .and_then(|h| h.write_svg(path))
+    .write_svg(path)
     .map_err(failure)
 }
 

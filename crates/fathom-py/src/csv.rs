@@ -1,4 +1,4 @@
-//! The CSV files of a run (`fathom_sim::output`'s format: one header row, `\n` line
+//! The CSV files of a run (`fathom_report::output`'s format: one header row, `\n` line
 //! ends, RFC 4180 quoting of text cells) as columns: a column whose every cell is a
 //! number (`NaN` and `inf` included) becomes a float64 numpy array, any other column a
 //! list of strings.

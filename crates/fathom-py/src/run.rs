@@ -11,9 +11,9 @@
 
 use std::path::{Path, PathBuf};
 
+use fathom_experiments::registry;
+use fathom_report::output::Summary;
 use fathom_sim::experiment::{Environment, Executed, Job};
-use fathom_sim::experiments::registry;
-use fathom_sim::output::Summary;
 use fathom_sim::user_run::{
     RunOptions, check_command, check_scenario_text, one_line, peek_experiment, run_scenario_text,
 };
@@ -200,7 +200,9 @@ fn build_result(
 ) -> PyResult<RunResult> {
     // summary.json's own text through Python's json module: the dict is what
     // `json.load` gives for the file (key order and every float bit included)
-    let text = summary.to_json_pretty().map_err(|e| to_py_err(&e))?;
+    let text = summary
+        .to_json_pretty()
+        .map_err(|e| to_py_err(&SimError::from(e)))?;
     let summary_py = py.import("json")?.call_method1("loads", (text,))?;
     let dict = summary_py.cast::<PyDict>()?;
     let get = |k: &str| -> PyResult<Py<PyAny>> {

@@ -1,11 +1,13 @@
-//! The error type of the experiment layer: file I/O, scenario parsing and validation,
-//! output writing, plotting and experiment selection.
+//! The error type of the runner: file I/O, scenario parsing and validation, the
+//! outputs' errors (wrapped), and experiment selection.
 
 use std::path::PathBuf;
 
 use fathom_core::CoreError;
 
-/// Everything that can go wrong in `fathom-sim`.
+/// Everything that can go wrong in `fathom-sim` and in the jobs it runs (the paper
+/// experiments of `fathom-experiments` and the replays of `fathom-replay` return it
+/// from the [`Experiment`](crate::Experiment) methods they implement).
 ///
 /// Variants carry the file, key path, row or experiment concerned. Wrapped causes are
 /// exposed through [`std::error::Error::source`], so `anyhow`'s `{:#}` prints the full
@@ -74,24 +76,6 @@ pub enum SimError {
         known: Vec<String>,
     },
 
-    /// An output value that must be finite is NaN or infinite (JSON cannot hold it).
-    #[error("{what}: value is not finite ({value})")]
-    NonFinite {
-        /// Where the value sits (e.g. "summary row `MF` / `mean_3d`: value").
-        what: String,
-        /// The offending value.
-        value: f64,
-    },
-
-    /// A plot could not be drawn (bad input data or a drawing-backend failure).
-    #[error("plot `{}`: {reason}", path.display())]
-    Plot {
-        /// The SVG file that was to be written.
-        path: PathBuf,
-        /// What went wrong (e.g. "series `EFF` is empty", "series `MF` point 3 is NaN").
-        reason: String,
-    },
-
     /// Writing a CSV / Markdown output was refused (ragged columns, bad header, ...).
     #[error("output `{}`: {reason}", path.display())]
     Output {
@@ -110,6 +94,10 @@ pub enum SimError {
         #[source]
         source: serde_json::Error,
     },
+
+    /// Writing an output failed, or an output folder could not be claimed.
+    #[error(transparent)]
+    Report(#[from] fathom_report::ReportError),
 
     /// A statistic could not be computed (empty or non-finite input, ...).
     #[error(transparent)]
@@ -174,6 +162,7 @@ impl SimError {
             | SimError::Input(_) => true,
             SimError::Io { action, .. } => matches!(*action, "read" | "list directory"),
             SimError::Experiment { source, .. } => source.is_user_error(),
+            SimError::Report(e) => e.is_user_error(),
             // A file the user gave that is not valid JSON (a corrupted shard record);
             // writing JSON never fails with these categories.
             SimError::Json { source, .. } => matches!(

@@ -1,10 +1,12 @@
-//! Experiment layer of fathom: scenario files, reproducible parallel Monte Carlo runs,
-//! the `summary.json` / CSV / Markdown / SVG outputs, and the paper-experiment driver
-//! behind `cargo xtask paper`. This is the only fathom library crate that does file I/O.
+//! The runner of fathom: scenario files, the [`Experiment`] trait, reproducible
+//! parallel Monte Carlo runs, the cost model, and the driver that takes any job
+//! (a paper experiment of `fathom-experiments`, a replay of `fathom-replay`) through
+//! one pipeline into `fathom-report`'s outputs, `cargo xtask paper` and sharded
+//! campaigns included.
 //!
 //! ```
 //! use fathom_sim::montecarlo::run_monte_carlo;
-//! use fathom_sim::output::{Claim, Row, Summary, summary_md_table};
+//! use fathom_report::output::{Claim, Row, Summary, summary_md_table};
 //! use rand::Rng;
 //!
 //! // 100 runs, base seed 1, on 2 threads: run i draws from its own ChaCha8 stream, so the
@@ -38,28 +40,22 @@
 //! - [`scenario`]: TOML scenario loading with file / key / line error messages;
 //! - [`cost`]: a scenario's samples, memory and run time before it runs, and the limits;
 //! - [`montecarlo`]: [`run_monte_carlo`](montecarlo::run_monte_carlo) and its seeding rule;
-//! - [`output`]: [`Summary`](output::Summary) (`summary.json`), CSV and Markdown helpers;
 //! - [`progress`]: the progress hook of long Monte Carlo batches (the library never prints);
-//! - [`plot`]: SVG line, plan-view, histogram, heat-map and sample-time figures;
-//! - [`experiment`]: the [`Experiment`] registry type and
-//!   [`run_paper`];
-//! - [`experiments`]: the registered paper experiments.
+//! - [`experiment`]: the [`Experiment`] trait and its object-safe face
+//!   [`DynExperiment`];
+//! - [`driver`]: the pipeline ([`run_paper`], one experiment into its output folder,
+//!   campaigns);
+//! - [`method_list`]: `methods = [...]` selections and method names;
+//! - [`user_run`]: `fathom run` / `fathom check` of any scenario file.
 
 pub mod cost;
-pub mod data;
 pub mod driver;
 pub mod error;
-pub mod example_log;
 pub mod experiment;
-pub mod experiments;
 pub mod method_list;
 pub mod montecarlo;
-pub mod output;
-pub mod plot;
 pub mod progress;
-pub mod replay;
 pub mod scenario;
-pub mod scenario_docs;
 pub mod user_run;
 
 pub use driver::{PaperOptions, PaperResult, error_chain, run_paper};

@@ -235,7 +235,7 @@ pub struct RunOptions {
 /// outputs (figures, CSV, `summary.json`, `report.md`) plus `scenario.toml` (the file
 /// as given), `scenario.resolved.toml` (defaults filled in, `base_seed` = the seed
 /// actually used, so running it reproduces the results) and `run_info.json` into the
-/// output directory, through [`crate::driver::outdir`]: a folder holding files fathom
+/// output directory, through [`fathom_report::outdir`]: a folder holding files fathom
 /// did not write is refused (kept with `force`), one that another process writes is
 /// refused, and the previous outputs are replaced only once the new ones are
 /// complete.
@@ -321,92 +321,4 @@ pub fn run_scenario_text(
         scenario_files: true,
     };
     execute_to(exp, &job, &out_dir, &write)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::experiments;
-
-    fn root() -> PathBuf {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
-    }
-
-    #[test]
-    fn every_preset_checks_and_round_trips() {
-        let reg = experiments::registry();
-        for exp in &reg {
-            let c = check_scenario(&root().join(exp.default_scenario()), &reg).unwrap();
-            assert_eq!(c.experiment, exp.name());
-            assert!(c.keys > 5, "{}: {} keys", exp.name(), c.keys);
-            // The resolved TOML is itself a valid scenario.
-            let again = check_scenario_text(&c.resolved_toml, "resolved", &reg).unwrap();
-            assert_eq!(again.resolved_toml, c.resolved_toml);
-        }
-    }
-
-    #[test]
-    fn every_seeded_preset_resolves_with_a_new_seed_and_run_count() {
-        let reg = experiments::registry();
-        for exp in &reg {
-            let text = std::fs::read_to_string(root().join(exp.default_scenario())).unwrap();
-            match exp.resolve(&text, "preset", Some(7), Some(123_456)) {
-                Ok(r) => {
-                    assert_eq!((r.runs, r.base_seed), (Some(7), Some(123_456)));
-                    // Still a valid scenario of the same experiment, now with both.
-                    let again = exp.resolve(&r.toml, "resolved", None, None).unwrap();
-                    assert_eq!(again, r);
-                }
-                Err(e) => {
-                    assert_eq!(exp.name(), "plaza", "only plaza is deterministic: {e}");
-                    assert!(e.to_string().contains("--seed"), "{e}");
-                }
-            }
-        }
-    }
-
-    #[test]
-    fn seed_on_a_deterministic_experiment_and_huge_seeds_are_usage_errors() {
-        let out = std::env::temp_dir().join(format!("fathom-sim-seed-{}", std::process::id()));
-        let options = RunOptions {
-            scenario: root().join("scenarios/plaza.toml"),
-            out_dir: Some(out.clone()),
-            runs: None,
-            threads: None,
-            seed: Some(5),
-            base_dir: root(),
-            force: false,
-            limits: Limits::default(),
-        };
-        let reg = experiments::registry();
-        let e = run_scenario(&options, &reg).unwrap_err();
-        assert!(matches!(e, SimError::InvalidArgument { .. }), "{e}");
-        let s = e.to_string();
-        assert!(s.contains("--seed") && s.contains("deterministic"), "{s}");
-        // Refused before anything is written.
-        assert!(!out.exists());
-        let huge = RunOptions {
-            scenario: root().join("scenarios/beacons.toml"),
-            seed: Some(u64::MAX),
-            ..options
-        };
-        let s = run_scenario(&huge, &reg).unwrap_err().to_string();
-        assert!(s.contains("--seed") && s.contains("at most"), "{s}");
-        assert!(!out.exists());
-    }
-
-    #[test]
-    fn experiment_key_errors() {
-        let reg = experiments::registry();
-        let e = check_scenario_text("runs = 3\n", "a.toml", &reg).unwrap_err();
-        assert!(
-            e.to_string()
-                .starts_with("a.toml: key `experiment`: missing"),
-            "{e}"
-        );
-        let e = check_scenario_text("experiment = \"x\"\n", "a.toml", &reg).unwrap_err();
-        assert!(e.to_string().contains("unknown experiment \"x\""), "{e}");
-        let e = check_scenario_text("experiment = 3\n", "a.toml", &reg).unwrap_err();
-        assert!(e.to_string().contains("must be a string"), "{e}");
-    }
 }

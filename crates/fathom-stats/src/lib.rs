@@ -73,7 +73,8 @@ pub use error_series::{
 };
 pub use histogram::Histogram;
 pub use monte_carlo::{
-    AggregateRow, Aggregator, MeanCi, MeanInterval, mean_and_ci95, mean_ci, mean_interval,
+    AggregateRow, Aggregator, CiBand, MeanCi, MeanInterval, mean_and_ci95, mean_ci,
+    mean_curve_ci95, mean_interval,
 };
 pub use proportion::{MedianCi, Proportion, clopper_pearson, median_ci};
 pub use quantile::{chi2_cdf, chi2_quantile, normal_quantile, student_t_quantile};

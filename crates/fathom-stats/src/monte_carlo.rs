@@ -253,6 +253,48 @@ impl Aggregator {
     }
 }
 
+/// A confidence band: `(x, lo, hi)` per point.
+pub type CiBand = Vec<(f64, f64, f64)>;
+
+/// The per-x mean over runs and its 95 % CI band `(x, lo, hi)` (Student t over the
+/// runs at each x), for a mean curve drawn with its interval. Every run has one value
+/// per x; with fewer than two runs the band is empty. Where every run's value is
+/// non-negative (an error norm) the band's lower edge is cut at 0.
+///
+/// # Errors
+/// [`StatsError::LengthMismatch`] if a run's length differs from `xs`.
+pub fn mean_curve_ci95(xs: &[f64], runs: &[&[f64]]) -> Result<(Vec<f64>, CiBand), StatsError> {
+    if let Some(r) = runs.iter().find(|r| r.len() != xs.len()) {
+        return Err(StatsError::LengthMismatch {
+            what: "mean curve".to_string(),
+            left_name: "x values",
+            left: xs.len(),
+            right_name: "a run",
+            right: r.len(),
+        });
+    }
+    let mut mean = Vec::with_capacity(xs.len());
+    let mut band = Vec::new();
+    let mut column = Vec::with_capacity(runs.len());
+    for (j, &x) in xs.iter().enumerate() {
+        column.clear();
+        column.extend(runs.iter().map(|r| r[j]));
+        let m = column.iter().sum::<f64>() / column.len().max(1) as f64;
+        mean.push(m);
+        if runs.len() >= 2 {
+            let (_, [lo, hi]) = mean_and_ci95(&column)?;
+            // A non-negative quantity (an error norm): the band stops at 0.
+            let lo = if column.iter().all(|&v| v >= 0.0) {
+                lo.max(0.0)
+            } else {
+                lo
+            };
+            band.push((x, lo, hi));
+        }
+    }
+    Ok((mean, band))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -350,5 +392,19 @@ mod tests {
         assert_eq!(agg.values("MF", "mean_3d").unwrap(), &[2.0, 3.0, 4.0, 5.0]);
         assert_eq!(agg.values("T2T", "rmse_3d").unwrap(), &[5.0_f64.sqrt()]);
         assert_eq!(agg.len(), 7);
+    }
+
+    #[test]
+    fn mean_curve_band_brackets_the_mean() {
+        let (mean, band) =
+            mean_curve_ci95(&[0.0, 1.0, 2.0], &[&[1.0, 2.0, 3.0], &[3.0, 4.0, 5.0]]).unwrap();
+        assert_eq!(mean, [2.0, 3.0, 4.0]);
+        assert_eq!(band.len(), 3);
+        for ((x, lo, hi), m) in band.iter().zip(&mean) {
+            assert!(lo < m && m < hi, "{x}: {lo} {m} {hi}");
+        }
+        let (_, one) = mean_curve_ci95(&[0.0], &[&[1.0]]).unwrap();
+        assert!(one.is_empty());
+        assert!(mean_curve_ci95(&[0.0, 1.0], &[&[1.0]]).is_err());
     }
 }

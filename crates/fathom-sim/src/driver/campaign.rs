@@ -127,7 +127,7 @@ impl RecordSink for FileSink {
 }
 
 /// Runs shard `shard` of `exp` on `job` into the folder `dir`: the record files and
-/// `manifest.json`, written like every output folder ([`super::outdir`]: a folder
+/// `manifest.json`, written like every output folder ([`fathom_report::outdir`]: a folder
 /// holding files fathom did not write is refused unless `force`, and an earlier
 /// shard's folder is replaced only once the new records are complete).
 ///
@@ -172,7 +172,7 @@ pub fn run_shard(
         path: dir.join("manifest.json"),
         source: e,
     })?;
-    crate::output::write_text(claim.dir().join("manifest.json"), &(json + "\n"))?;
+    fathom_report::output::write_text(claim.dir().join("manifest.json"), &(json + "\n"))?;
     claim.commit(RunInfo {
         fathom_version: manifest.fathom_version.clone(),
         command: "shard".into(),
@@ -350,7 +350,7 @@ impl RecordSource for FileSource {
 
 /// Merges the shard folders `dirs` into the outputs of one run written to `out_dir`
 /// (the same files as a single-process run: summary.json, report.md, figures, CSV),
-/// written like every output folder ([`super::outdir`]): a folder holding files fathom
+/// written like every output folder ([`fathom_report::outdir`]): a folder holding files fathom
 /// did not write is refused unless `force`, and nothing is replaced before the merge
 /// is complete.
 ///

@@ -6,7 +6,7 @@
 //! 1. [`DynExperiment::assess`]: parse the scenario, apply `--runs` / `--seed`, check,
 //!    estimate the cost against the limits;
 //! 2. [`OutDir::claim`]: lock the output folder, refuse one holding files fathom did
-//!    not write (unless forced) and check that it can be written ([`outdir`]);
+//!    not write (unless forced) and check that it can be written ([`fathom_report::outdir`]);
 //! 3. [`DynExperiment::execute`]: prepare, run the Monte Carlo batches, analyse;
 //! 4. write the experiment's figures and CSV files, `summary.json` and `report.md`
 //!    (header, the table, the claims, the experiment's notes, links to the figures)
@@ -17,7 +17,6 @@
 //! step 4, once everything is written.
 
 pub mod campaign;
-pub mod outdir;
 mod paper;
 mod report;
 mod setup;
@@ -31,9 +30,9 @@ use std::time::{Duration, Instant};
 
 use crate::SimError;
 use crate::experiment::{DynExperiment, Executed, Job};
-use crate::output::{Summary, write_summary_json, write_text, write_with};
+use fathom_report::output::{Summary, write_summary_json, write_text, write_with};
 
-pub use outdir::{OutDir, RUN_INFO_FILE, RunInfo, write_file_atomically};
+pub use fathom_report::outdir::{OutDir, RUN_INFO_FILE, RunInfo, write_file_atomically};
 pub use setup::Setup;
 
 pub use paper::{PaperOptions, PaperResult, run_paper, run_paper_to};

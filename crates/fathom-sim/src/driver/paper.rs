@@ -14,7 +14,7 @@ use super::report::{console_section, demote_headings, rebase_links};
 use super::{ExperimentResult, WriteOptions, error_chain, execute_to, write_file_atomically};
 use crate::SimError;
 use crate::experiment::{DynExperiment, Environment, Job};
-use crate::output::{md_table, read_summary_json};
+use fathom_report::output::{md_table, read_summary_json};
 
 /// Options of [`run_paper`] (the `cargo xtask paper` flags).
 #[derive(Debug, Clone, PartialEq, Eq)]

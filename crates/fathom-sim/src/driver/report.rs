@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 
 use super::{ExperimentResult, Setup};
 use crate::experiment::Analysis;
-use crate::output::{Claim, Row, Summary, md_table, text_table};
+use fathom_report::output::{Claim, Row, Summary, md_table, text_table};
 
 /// Significant digits of the numbers in the printed and Markdown tables.
 pub const TABLE_DECIMALS: usize = 4;

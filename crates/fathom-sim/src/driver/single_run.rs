@@ -1,15 +1,17 @@
 //! One Monte Carlo run of a registered experiment, prepared once (scenario loaded and
 //! checked, shared truth built) and then callable with any run RNG: what the
-//! benchmarks (`crates/fathom-sim/benches/montecarlo.rs`, `cargo xtask bench`) time
+//! benchmarks (`crates/fathom-experiments/benches/montecarlo.rs`, `cargo xtask bench`) time
 //! as "one run", and the unit of the thread-scaling measurement.
 //!
 //! ```no_run
 //! use fathom_sim::driver::SingleRun;
-//! use fathom_sim::experiments::registry;
 //! use fathom_sim::montecarlo::run_rng;
-//! let beacons = registry().into_iter().find(|e| e.name() == "beacons").unwrap();
+//! # fn demo(registry: &[&'static dyn fathom_sim::DynExperiment]) {
+//! // `registry` is `fathom_experiments::registry()` in the benchmarks.
+//! let beacons = *registry.iter().find(|e| e.name() == "beacons").unwrap();
 //! let run = SingleRun::prepare(beacons, std::path::Path::new(".")).unwrap();
 //! run.run(3, &mut run_rng(3, 3)).unwrap();
+//! # }
 //! ```
 
 use std::path::Path;

@@ -9,8 +9,8 @@ use serde::{Deserialize, Serialize};
 
 use super::*;
 use crate::experiment::{Analysis, Batch, DynExperiment, Environment, Experiment};
-use crate::output::{Claim, Row, read_summary_json};
-use crate::plot::{LinePlot, Series};
+use fathom_report::output::{Claim, Row, read_summary_json};
+use fathom_report::plot::{LinePlot, Series};
 
 #[derive(Debug, Clone, Serialize, Deserialize, schemars::JsonSchema)]
 #[serde(deny_unknown_fields)]

@@ -4,8 +4,10 @@
 use std::path::Path;
 
 use crate::SimError;
-use crate::output::{Claim, CsvCell, Row, check_csv_columns, csv_records_text, stream_csv_columns};
-use crate::plot::Figure;
+use fathom_report::output::{
+    Claim, CsvCell, Row, check_csv_columns, csv_records_text, stream_csv_columns,
+};
+use fathom_report::plot::Figure;
 
 /// One output file, held in memory until the driver writes it.
 #[derive(Debug, Clone, PartialEq)]
@@ -147,7 +149,7 @@ impl Analysis {
     }
 
     /// Adds the CSV file `name` from equal-length numeric columns
-    /// ([`crate::output::csv_columns_text`]).
+    /// ([`fathom_report::output::csv_columns_text`]).
     ///
     /// # Errors
     /// A bad name, bad headers or columns of different lengths.
@@ -184,7 +186,7 @@ impl Analysis {
     }
 
     /// Adds the CSV file `name` from mixed text/number records
-    /// ([`crate::output::csv_records_text`]).
+    /// ([`fathom_report::output::csv_records_text`]).
     ///
     /// # Errors
     /// A bad name, bad headers or a record of the wrong length.

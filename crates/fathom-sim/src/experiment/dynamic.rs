@@ -7,9 +7,9 @@ use super::{Analysis, Batch, Environment, Experiment, ScenarioFile};
 use crate::SimError;
 use crate::cost::Cost;
 use crate::montecarlo::try_run_indices;
-use crate::output::Summary;
 use crate::progress::{Progress, ProgressEvent};
 use crate::scenario::{check_magnitudes, parse_toml, require_experiment, to_toml};
+use fathom_report::output::Summary;
 
 /// What the driver asks of one execution of an experiment.
 #[derive(Debug, Clone)]

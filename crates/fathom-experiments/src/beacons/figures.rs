@@ -1,0 +1,292 @@
+//! The `beacons` figures and CSV files: mean error versus time per case, per-run
+//! statistics, and the single-run figures of the figure run (paths, estimate versus
+//! truth, sample times).
+
+use fathom_sensors::BeaconSuiteData;
+use fathom_traj::{Trajectory, velocity_command::VelocityCommandMotion};
+
+use super::analysis::main_case;
+use super::run::{BatchSums, KeptStats, simulate_run};
+use super::scenario::Checked;
+use super::{MAIN_CASE, method};
+use fathom_report::plot::{LinePlot, PlanPlot, Series, Timeline};
+use fathom_sim::SimError;
+use fathom_sim::experiment::Analysis;
+use fathom_sim::montecarlo::run_rng;
+
+/// Adds every figure and CSV file to `out`.
+pub(super) fn write(
+    checked: &Checked,
+    per_run: &[Vec<Vec<KeptStats>>],
+    sums: &BatchSums,
+    out: &mut Analysis,
+) -> Result<(), SimError> {
+    let schemes = &checked.schemes;
+    // Mean error vs time over runs, every case and scheme.
+    let n_t = sums.cases[0][0].errors.len();
+    let period = checked.cases[0].setup.settings.epoch_period;
+    let times: Vec<f64> = (1..=n_t).map(|j| j as f64 * period).collect();
+    let mut headers = vec!["time_s".to_owned()];
+    let mut cols: Vec<Vec<f64>> = vec![times.clone()];
+    for (ci, case) in checked.cases.iter().enumerate() {
+        let mut plot = LinePlot::new(
+            format!(
+                "3D position error vs time, mean over {} runs (case {})",
+                checked.runs, case.name
+            ),
+            "time (s)",
+            "3D position error (m)",
+        );
+        for (si, s) in schemes.iter().enumerate() {
+            let acc = &sums.cases[ci][si];
+            let mean: Vec<f64> = acc.errors.iter().map(|e| e / acc.runs as f64).collect();
+            plot.series
+                .push(Series::from_xy(s.short_name(), &times, &mean)?);
+            headers.push(format!(
+                "{}_mean_error_m",
+                method(*s, &case.name).replace('/', "_")
+            ));
+            cols.push(mean);
+        }
+        out.figure(&format!("error_vs_time_{}.svg", case.name), &plot)?;
+    }
+    let h: Vec<&str> = headers.iter().map(String::as_str).collect();
+    let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    out.csv_columns("error_vs_time.csv", &h, &c)?;
+
+    // Per-run statistics.
+    let mut headers = vec!["run".to_owned()];
+    let mut cols: Vec<Vec<f64>> = vec![(0..per_run.len()).map(|r| r as f64).collect()];
+    for (ci, case) in checked.cases.iter().enumerate() {
+        for (si, s) in schemes.iter().enumerate() {
+            let m = method(*s, &case.name).replace('/', "_");
+            for (name, g) in [
+                (
+                    "mean",
+                    &(|x: &KeptStats| x.stats.mean) as &dyn Fn(&KeptStats) -> f64,
+                ),
+                ("std", &|x: &KeptStats| x.stats.std),
+                ("max", &|x: &KeptStats| x.stats.max),
+                ("rmse", &|x: &KeptStats| x.stats.rmse),
+                ("outliers_rejected", &|x: &KeptStats| x.rejected as f64),
+                ("false_rejections", &|x: &KeptStats| {
+                    x.false_rejections as f64
+                }),
+                ("nees_time_avg", &|x: &KeptStats| x.nees_mean),
+            ] {
+                headers.push(format!("{m}_{name}"));
+                cols.push(per_run.iter().map(|r| g(&r[ci][si])).collect());
+            }
+        }
+    }
+    let h: Vec<&str> = headers.iter().map(String::as_str).collect();
+    out.csv_owned_columns("per_run_stats.csv", &h, cols)?;
+
+    // Single-run figures: recompute the figure run (deterministic).
+    let mut rng = run_rng(checked.base_seed, checked.figure_run);
+    let detail = simulate_run(checked, &mut rng)?;
+    let main = main_case(checked);
+    let commanded = VelocityCommandMotion::commanded(
+        &checked
+            .motion
+            .check()
+            .map_err(|e| SimError::model("motion parameters", e))?,
+    )
+    .map_err(|e| SimError::model("commanded motion", e))?;
+    let en = |m: &VelocityCommandMotion| -> Vec<(f64, f64)> {
+        m.samples()
+            .iter()
+            .map(|s| (s.pos_in_nav.y, s.pos_in_nav.x))
+            .collect()
+    };
+    let beacons: Vec<(f64, f64)> = checked.cases[main]
+        .setup
+        .beacons
+        .iter()
+        .map(|b| (b.y, b.x))
+        .collect();
+    let plan = PlanPlot::new(
+        format!(
+            "commanded vs actual path (run {}), plan view",
+            checked.figure_run
+        ),
+        "east (m)",
+        "north (m)",
+    )
+    .with_path(Series::new("commanded", en(&commanded)))
+    .with_path(Series::new("actual", en(&detail.motion)))
+    .with_markers(Series::new("beacons", beacons));
+    out.figure("path_plan.svg", &plan)?;
+    let depth = |m: &VelocityCommandMotion| -> Vec<(f64, f64)> {
+        m.samples()
+            .iter()
+            .map(|s| (s.time, s.pos_in_nav.z))
+            .collect()
+    };
+    let mut p = LinePlot::new("commanded vs actual depth", "time (s)", "depth (m)");
+    p.series.push(Series::new("commanded", depth(&commanded)));
+    p.series.push(Series::new("actual", depth(&detail.motion)));
+    out.figure("path_depth.svg", &p)?;
+
+    let (data, runs) = &detail.cases[main];
+    // The single-run estimate figures show SC (or the first scheme run without it).
+    let fig = schemes
+        .iter()
+        .position(|s| s.short_name() == "SC")
+        .unwrap_or(0);
+    let (sc, fig_name) = (&runs[fig], schemes[fig].short_name());
+    let truth_at = |t: f64| {
+        detail
+            .motion
+            .state_at(t)
+            .map_err(|e| SimError::model("truth", e))
+    };
+    let mut truth_pts = Vec::with_capacity(sc.times.len());
+    for &t in &sc.times {
+        truth_pts.push(truth_at(t)?);
+    }
+    let plan = PlanPlot::new(
+        format!(
+            "{fig_name} estimate vs truth (case {MAIN_CASE}, run {})",
+            checked.figure_run
+        ),
+        "east (m)",
+        "north (m)",
+    )
+    .with_path(Series::new(
+        "truth",
+        truth_pts
+            .iter()
+            .map(|s| (s.pos_in_nav.y, s.pos_in_nav.x))
+            .collect(),
+    ))
+    .with_path(Series::new(
+        format!("{fig_name} estimate"),
+        sc.estimates.iter().map(|x| (x[1], x[0])).collect(),
+    ));
+    let fig_file = fig_name.to_lowercase();
+    out.figure(&format!("{fig_file}_estimate_vs_truth_plan.svg"), &plan)?;
+    let mut p = LinePlot::new(
+        format!(
+            "{fig_name} estimate vs truth: depth (case {MAIN_CASE}, run {})",
+            checked.figure_run
+        ),
+        "time (s)",
+        "depth (m)",
+    );
+    p.series.push(Series::new(
+        "truth",
+        sc.times
+            .iter()
+            .zip(&truth_pts)
+            .map(|(t, s)| (*t, s.pos_in_nav.z))
+            .collect(),
+    ));
+    p.series.push(Series::new(
+        format!("{fig_name} estimate"),
+        sc.times
+            .iter()
+            .zip(&sc.estimates)
+            .map(|(t, x)| (*t, x[2]))
+            .collect(),
+    ));
+    out.figure(&format!("{fig_file}_estimate_vs_truth_depth.svg"), &p)?;
+    let mut p = LinePlot::new(
+        format!(
+            "3D position error vs time (case {MAIN_CASE}, run {})",
+            checked.figure_run
+        ),
+        "time (s)",
+        "3D position error (m)",
+    );
+    for (s, r) in schemes.iter().zip(runs) {
+        p.series
+            .push(Series::from_xy(s.short_name(), &r.times, &r.errors_3d)?);
+    }
+    out.figure("error_vs_time_single_run.svg", &p)?;
+    let mut cols: Vec<Vec<f64>> = vec![sc.times.clone()];
+    cols.push(truth_pts.iter().map(|s| s.pos_in_nav.x).collect());
+    cols.push(truth_pts.iter().map(|s| s.pos_in_nav.y).collect());
+    cols.push(truth_pts.iter().map(|s| s.pos_in_nav.z).collect());
+    cols.push(truth_pts.iter().map(|s| s.attitude.yaw).collect());
+    let mut headers = vec![
+        "time_s",
+        "true_north_m",
+        "true_east_m",
+        "true_down_m",
+        "true_yaw_rad",
+    ]
+    .into_iter()
+    .map(String::from)
+    .collect::<Vec<_>>();
+    for (s, r) in schemes.iter().zip(runs) {
+        for (i, n) in ["north_m", "east_m", "down_m", "yaw_rad"]
+            .iter()
+            .enumerate()
+        {
+            headers.push(format!("{}_{n}", s.short_name()));
+            cols.push(r.estimates.iter().map(|x| x[i]).collect());
+        }
+    }
+    let h: Vec<&str> = headers.iter().map(String::as_str).collect();
+    let c: Vec<&[f64]> = cols.iter().map(Vec::as_slice).collect();
+    out.csv_columns("single_run_estimates.csv", &h, &c)?;
+
+    // Sample-time diagram from the figure run's actual data: async (main case) and
+    // sync (the sync case, if any), with the SC/SI epochs.
+    let window = (0.0, 1.0);
+    let times_of = |v: Vec<f64>| {
+        v.into_iter()
+            .filter(|t| *t <= window.1 + 1e-9)
+            .collect::<Vec<_>>()
+    };
+    let mut rows = Vec::new();
+    let label = |d: &BeaconSuiteData, prefix: &str, rows: &mut Vec<(String, Vec<f64>)>| {
+        rows.push((
+            format!("{prefix}DVL"),
+            times_of(d.dvl.iter().map(|m| m.sample_time).collect()),
+        ));
+        rows.push((
+            format!("{prefix}AHRS"),
+            times_of(d.ahrs_rate.iter().map(|m| m.sample_time).collect()),
+        ));
+        for (k, r) in d.ranges.iter().enumerate() {
+            rows.push((
+                format!("{prefix}range{}", k + 1),
+                times_of(r.iter().map(|m| m.sample_time).collect()),
+            ));
+        }
+        rows.push((
+            format!("{prefix}depth"),
+            times_of(d.depth.iter().map(|m| m.sample_time).collect()),
+        ));
+    };
+    label(data, "async: ", &mut rows);
+    if let Some(si) = checked.cases.iter().position(|c| c.config.is_synchronous()) {
+        let d = &detail.cases[si].0;
+        rows.push((
+            "sync: all sensors".into(),
+            times_of(d.depth.iter().map(|m| m.sample_time).collect()),
+        ));
+    }
+    let period = checked.cases[main].setup.settings.epoch_period;
+    rows.push((
+        "SC/SI epochs".into(),
+        times_of(
+            (1..)
+                .map(|j| j as f64 * period)
+                .take_while(|t| *t <= window.1 + 1e-9)
+                .collect(),
+        ),
+    ));
+    let timeline = Timeline::new(
+        format!(
+            "sensor sample times (run {}): asynchronous vs synchronous",
+            checked.figure_run
+        ),
+        "time (s)",
+        rows,
+        Some(window),
+    );
+    out.figure("sample_times.svg", &timeline)
+}

@@ -1,0 +1,135 @@
+//! The simulated example logs replayed through `fathom-replay`: with and without
+//! ground truth, both log kinds (the INS / DVL log is the `vkf` mission cut to 600 s:
+//! bottom lock is lost from about 300 s on).
+
+use std::path::PathBuf;
+
+use fathom_data::layout::{LogKind, Manifest, write_log};
+use fathom_replay::ins_dvl::{parse_settings, replay};
+use fathom_replay::own_log::{INS_DVL_PRESET, RANGE_BEACON_PRESET, replay_dir};
+
+use crate::example_log::{ins_dvl_example, range_beacon_example};
+
+fn preset() -> String {
+    std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenarios/ins-dvl.toml"),
+    )
+    .unwrap()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir()
+        .join("fathom-sim-tests")
+        .join(format!("own-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+#[test]
+fn example_logs_replay_with_and_without_truth() {
+    for truth in [true, false] {
+        let dir = scratch(&format!("rb-{truth}"));
+        let log = range_beacon_example(120.0, 3, truth).unwrap();
+        write_log(
+            &dir,
+            &Manifest::new(LogKind::RangeBeacon, "example"),
+            &log.to_files(),
+        )
+        .unwrap();
+        let out = replay_dir(LogKind::RangeBeacon, &dir, RANGE_BEACON_PRESET, "preset").unwrap();
+        let report = &out.files[0].1;
+        assert_eq!(report.contains("Position error against"), truth, "{report}");
+        assert!(report.contains("| SC | ranges |"), "{report}");
+        assert!(out.console.contains("mean NIS"));
+        let est = &out.files[2].1;
+        assert_eq!(est.lines().next().unwrap().contains("true_north[m]"), truth);
+        // A range-beacon folder is not an INS log.
+        let e = replay_dir(LogKind::InsDvl, &dir, INS_DVL_PRESET, "preset").unwrap_err();
+        assert!(
+            e.is_users() && e.to_string().contains("range-beacon"),
+            "{e}"
+        );
+    }
+    let dir = scratch("ins");
+    let log = ins_dvl_example(60.0, 3, false).unwrap();
+    write_log(
+        &dir,
+        &Manifest::new(LogKind::InsDvl, "example"),
+        &log.to_files(),
+    )
+    .unwrap();
+    let out = replay_dir(LogKind::InsDvl, &dir, INS_DVL_PRESET, "preset").unwrap();
+    assert!(
+        out.files[0].1.contains("| ESKF | DVL velocity |"),
+        "{}",
+        out.files[0].1
+    );
+    // A missing folder is the user's error, naming the folder.
+    let e = replay_dir(LogKind::InsDvl, &dir.join("nope"), INS_DVL_PRESET, "p").unwrap_err();
+    assert!(e.is_users() && e.to_string().contains("nope"), "{e}");
+}
+
+#[test]
+fn the_example_log_with_truth_scores_every_method() {
+    let log = ins_dvl_example(600.0, 5, true).unwrap();
+    let s = parse_settings(&preset(), "ins-dvl.toml").unwrap();
+    let r = replay(&log, &s).unwrap();
+    assert_eq!(r.times.len(), 600);
+    let final_err = |m: &str| {
+        *r.method(m)
+            .unwrap()
+            .errors_h
+            .as_ref()
+            .unwrap()
+            .last()
+            .unwrap()
+    };
+    let mean = |m: &str| r.method(m).unwrap().stats.unwrap().mean;
+    // Unflagged garbage from the DVL beyond its range ruins the naive filter; the
+    // switching box (VKF, ESKF) and the gate keep the error small.
+    for (m, factor) in [("VKF", 0.2), ("ESKF", 0.2), ("INS-DVL-gated", 0.5)] {
+        assert!(
+            final_err(m) < factor * final_err("INS-DVL"),
+            "{m}: {} vs {}",
+            final_err(m),
+            final_err("INS-DVL")
+        );
+        assert!(mean(m) < 20.0, "{m}: {}", mean(m));
+    }
+    // Aiding bounds the velocity error: the aided filters beat pure INS on average.
+    let vel = |m: &str| {
+        let v = r.method(m).unwrap().vel_errors_h.as_ref().unwrap();
+        v.iter().sum::<f64>() / v.len() as f64
+    };
+    assert!(
+        vel("VKF") < vel("PINS"),
+        "{} vs {}",
+        vel("VKF"),
+        vel("PINS")
+    );
+    // The VKF switched to the RPM speed while the DVL was beyond its range.
+    let vkf = r.method("VKF").unwrap();
+    let on_rpm = vkf.trace.velocity_updates.iter().filter(|u| u.rpm).count();
+    assert!(
+        on_rpm > 500 && r.invalid_dvl_rows > 500,
+        "{on_rpm} {}",
+        r.invalid_dvl_rows
+    );
+    assert!(r.method("PINS").unwrap().velocity_nis.is_none());
+}
+
+#[test]
+fn without_truth_the_nis_tells_the_naive_filter_from_the_switching_one() {
+    let log = ins_dvl_example(600.0, 5, false).unwrap();
+    let s = parse_settings(&preset(), "ins-dvl.toml").unwrap();
+    let r = replay(&log, &s).unwrap();
+    assert!(r.truth.is_none() && r.methods.iter().all(|m| m.stats.is_none()));
+    let naive = r.method("INS-DVL").unwrap().velocity_nis.unwrap();
+    let vkf = r.method("VKF").unwrap().dvl_nis.unwrap();
+    // Garbage velocities (±5 m/s) against a 2.5 cm/s model: a huge NIS.
+    assert!(naive.mean > 100.0 && !naive.consistent(), "{naive:?}");
+    // Valid DVL rows against the same model: NIS of the order of its 3 dof.
+    assert!(vkf.mean < 6.0, "{vkf:?}");
+    assert_eq!(vkf.dof, 3);
+    assert!(r.method("ESKF").unwrap().depth_nis.unwrap().count > 2000);
+}

@@ -1,0 +1,215 @@
+//! The `plaza` experiment: range-beacon localization on real data, the CMU Plaza1 log
+//! (see `shared/data/plaza1/README.md`), with dead reckoning, AS / SC / SI and
+//! ablations ([`fathom_replay::plaza`]).
+//!
+//! The data is not part of the repository. The folder named by `[data] dir` in
+//! `scenarios/plaza.toml` (default `shared/data/plaza1`) is looked up inside the
+//! base directory (the workspace root; the current directory for `fathom run`) and
+//! beside each of its ancestors, so a checkout next to `shared/` finds
+//! `../shared/data/plaza1`. When it is absent, `fathom run` refuses the scenario (a
+//! user error naming `data.dir`); `cargo xtask paper` (whose environment sets
+//! `skip_missing_data`) **skips** the experiment: it has no batch to run, its summary
+//! has no rows (`runs = 0`) and the report says why.
+//!
+//! Files: `analysis` (rows and claims), `figures`, `report`; the replay itself lives in
+//! [`fathom_replay::plaza`], shared with `fathom replay plaza`.
+
+mod analysis;
+mod cost;
+mod figures;
+mod report;
+
+use std::path::{Path, PathBuf};
+
+use rand_chacha::ChaCha8Rng;
+
+use fathom_data::plaza::PlazaLog;
+use fathom_replay::plaza::{PlazaReplay, PlazaSettings, PlazaToml, replay};
+use fathom_sim::SimError;
+use fathom_sim::cost::CostTerm;
+use fathom_sim::experiment::{Analysis, Batch, Environment, Experiment};
+
+pub use analysis::{
+    GTSAM_BATCH_M, MAIN_METHODS, MAX_ERROR_LIMIT_M, REQUIRED_REDUCTION, SMOOTHED_TARGET_M,
+    smoothed_name,
+};
+
+/// The settings and the log (or why it is absent).
+#[derive(Debug)]
+pub struct Prepared {
+    settings: PlazaSettings,
+    data: Result<(PathBuf, PlazaLog), String>,
+}
+
+/// The `plaza` experiment.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Plaza;
+
+impl Experiment for Plaza {
+    type Scenario = PlazaToml;
+    type Checked = PlazaSettings;
+    type Prepared = Prepared;
+    type Record = PlazaReplay;
+    type Kept = Self::Record;
+    type Fold = ();
+
+    const NAME: &'static str = "plaza";
+    const SEED_DOC: &'static str = "data/plaza1/README.md";
+    const DEFAULT_SCENARIO: &'static str = "scenarios/plaza.toml";
+    const PRESET: &'static str = include_str!("../../../../scenarios/plaza.toml");
+    const ABOUT: &'static str = "range-beacon localization on real data (CMU Plaza1): dead reckoning vs AS / SC / SI with range calibration and robust gating";
+
+    fn check(&self, scenario: &PlazaToml, file: &str) -> Result<PlazaSettings, SimError> {
+        scenario.check(file)
+    }
+
+    fn cost(&self, scenario: &PlazaToml) -> Vec<CostTerm> {
+        cost::terms(scenario)
+    }
+
+    fn prepare(&self, settings: PlazaSettings, env: &Environment) -> Result<Prepared, SimError> {
+        let data = match find_data_dir(&env.base_dir, &settings.data_dir) {
+            None if !env.skip_missing_data => {
+                return Err(SimError::invalid_argument(
+                    "data folder",
+                    format!(
+                        "`{}` (key `data.dir`) is not found in `{}` or beside any of its \
+                         ancestors; put the data set's three files (`*_DR.txt`, `*_TD.txt`, \
+                         `*_.mat`) there, or run `fathom replay plaza <dir>` on the folder \
+                         holding them",
+                        settings.data_dir,
+                        env.base_dir.display()
+                    ),
+                ));
+            }
+            None => Err(format!(
+                "data folder `{}` not found in `{}` or beside any of its ancestors. The Plaza \
+                 data is not part of the repository; put the data set's three files \
+                 (`*_DR.txt`, `*_TD.txt`, `*_.mat`) in that folder, or run `fathom replay \
+                 plaza <dir>` on any folder holding them",
+                settings.data_dir,
+                env.base_dir.display()
+            )),
+            Some(dir) => {
+                let log = PlazaLog::read_dir(&dir, settings.range_order).map_err(|e| {
+                    SimError::model(format!("reading the Plaza data in `{}`", dir.display()), e)
+                })?;
+                Ok((dir, log))
+            }
+        };
+        Ok(Prepared { settings, data })
+    }
+
+    fn batches(&self, p: &Prepared) -> Vec<Batch> {
+        match &p.data {
+            Ok(_) => vec![Batch::new(Self::NAME, 1)],
+            Err(_) => Vec::new(),
+        }
+    }
+
+    fn run(
+        &self,
+        p: &Prepared,
+        _batch: usize,
+        _index: usize,
+        _rng: &mut ChaCha8Rng,
+    ) -> Result<PlazaReplay, SimError> {
+        match &p.data {
+            Ok((_, log)) => replay(log, &p.settings),
+            Err(reason) => Err(SimError::invalid_argument("plaza data", reason.clone())),
+        }
+    }
+
+    fn fold(
+        &self,
+        _prepared: &Prepared,
+        _batch: usize,
+        _index: usize,
+        record: Self::Record,
+        _fold: &mut (),
+    ) -> Self::Record {
+        record
+    }
+
+    fn analyse(
+        &self,
+        p: &Prepared,
+        mut records: Vec<Vec<PlazaReplay>>,
+        _folds: Vec<()>,
+        out: &mut Analysis,
+    ) -> Result<(), SimError> {
+        let (dir, r) = match (&p.data, records.first_mut().and_then(|b| b.pop())) {
+            (Ok((dir, _)), Some(r)) => (dir, r),
+            (Err(reason), _) => {
+                out.skip(reason.clone());
+                return Ok(());
+            }
+            (Ok(_), None) => {
+                return Err(SimError::invalid_argument(
+                    "plaza",
+                    "the replay did not run",
+                ));
+            }
+        };
+        analysis::rows_and_claims(&r, out);
+        figures::write(&r, out)?;
+        out.report(&format!(
+            "Real data, one deterministic replay (no Monte Carlo: `runs` = 1, no CIs, no \
+             paper numbers{}). Data folder: `{}`.\n\n",
+            if p.settings.smooth {
+                "; the `paper` column of the smoothed rows holds the GTSAM batch reference"
+            } else {
+                ""
+            },
+            dir.display()
+        ));
+        out.report(&report::report_section(&r));
+        Ok(())
+    }
+}
+
+/// The data folder `dir` inside `workspace_root` (for `fathom run`, the current
+/// directory) or beside one of its ancestors, the nearest first (an absolute `dir` is
+/// used as it is), if it exists.
+pub fn find_data_dir(workspace_root: &Path, dir: &str) -> Option<PathBuf> {
+    let rel = Path::new(dir);
+    if rel.is_absolute() {
+        return rel.is_dir().then(|| rel.to_path_buf());
+    }
+    workspace_root
+        .ancestors()
+        .map(|a| a.join(rel))
+        .find(|p| p.is_dir())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn data_dir_is_found_inside_the_root_or_beside_an_ancestor_nearest_first() {
+        let base = std::env::temp_dir()
+            .join("fathom-sim-tests")
+            .join(format!("plaza-find-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&base);
+        let root = base.join("a").join("repo");
+        std::fs::create_dir_all(&root).unwrap();
+        assert_eq!(find_data_dir(&root, "shared/data/x"), None);
+        std::fs::create_dir_all(base.join("shared/data/x")).unwrap();
+        assert_eq!(
+            find_data_dir(&root, "shared/data/x"),
+            Some(base.join("shared/data/x"))
+        );
+        // Inside the root (a user's `data/` next to their scenario) counts, and wins
+        // over the same name further up.
+        std::fs::create_dir_all(root.join("inside")).unwrap();
+        assert_eq!(find_data_dir(&root, "inside"), Some(root.join("inside")));
+        std::fs::create_dir_all(root.join("shared/data/x")).unwrap();
+        assert_eq!(
+            find_data_dir(&root, "shared/data/x"),
+            Some(root.join("shared/data/x"))
+        );
+        let abs = base.join("shared/data/x");
+        assert_eq!(find_data_dir(&root, abs.to_str().unwrap()), Some(abs));
+    }
+}

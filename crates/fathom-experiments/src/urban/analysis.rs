@@ -1,0 +1,160 @@
+//! The `urban` analysis: per scenario and method the Monte Carlo means of the per-run
+//! statistics with 95 % CIs (the paper column where it prints a number), the paired
+//! differences the claims read, the GNSS shadowing per scenario, the ablations
+//! against the main batch's runs of the same index, then claims, figures and report.
+
+use fathom_stats::{mean_and_ci95, paired_mean_ci};
+
+use super::check::Checked;
+use super::claims::{DIFFERENCES, claims, diff_row, method_row};
+use super::paper::paper_value;
+use super::record::{BatchFold, KeptRun};
+use super::trace::MethodStats;
+use super::world::Prepared;
+use super::{figures, report};
+use fathom_report::output::{CsvCell, Row};
+use fathom_sim::SimError;
+use fathom_sim::experiment::Analysis;
+
+/// Index of a metric in [`MethodStats::METRICS`].
+pub(super) fn metric_index(metric: &str) -> Option<usize> {
+    MethodStats::METRICS.iter().position(|m| *m == metric)
+}
+
+/// The per-run values of `metric` of method index `m` in scenario `s`.
+pub(super) fn values(kept: &[KeptRun], s: usize, m: usize, metric: usize) -> Vec<f64> {
+    kept.iter()
+        .map(|r| r[s].stats[m].values()[metric])
+        .collect()
+}
+
+fn mean_row(method: &str, metric: &str, v: &[f64]) -> Result<Row, SimError> {
+    let (mean, ci) = mean_and_ci95(v)?;
+    Ok(Row::new(method, metric, mean).with_ci95(ci[0], ci[1]))
+}
+
+fn diff(method: String, metric: &str, a: &[f64], b: &[f64]) -> Result<Row, SimError> {
+    let d = paired_mean_ci(a, b)?;
+    let [lo, hi] = d.bounds();
+    Ok(Row::new(method, format!("diff_{metric}"), d.mean).with_ci95(lo, hi))
+}
+
+/// Computes rows, claims, figures, CSV files and the report.
+pub(super) fn analyse(
+    prep: &Prepared,
+    kept: &[Vec<KeptRun>],
+    folds: &[BatchFold],
+    out: &mut Analysis,
+) -> Result<(), SimError> {
+    let c: &Checked = &prep.checked;
+    let (Some(main), Some(main_fold)) = (kept.first(), folds.first()) else {
+        return Err(SimError::invalid_argument("urban", "no main batch"));
+    };
+    for (s, spec) in c.scenes.iter().enumerate() {
+        for (m, method) in c.methods.iter().enumerate() {
+            let name = method_row(&spec.name, *method);
+            for (k, metric) in MethodStats::METRICS.iter().enumerate() {
+                let row = mean_row(&name, metric, &values(main, s, m, k))?
+                    .with_paper(paper_value(spec.paper, *method, metric));
+                out.row(row);
+            }
+        }
+        for (a, b, metric) in DIFFERENCES {
+            // A difference needs both methods (`methods` may select fewer).
+            let (Some(ia), Some(ib)) = (c.index_of(a), c.index_of(b)) else {
+                continue;
+            };
+            let k = metric_index(metric).unwrap_or(0);
+            out.row(diff(
+                diff_row(&spec.name, a, b),
+                metric,
+                &values(main, s, ia, k),
+                &values(main, s, ib, k),
+            )?);
+        }
+        let g = format!("{}/GNSS", spec.name);
+        let per = |f: fn(&super::record::KeptScene) -> f64| -> Vec<f64> {
+            main.iter().map(|r| f(&r[s])).collect()
+        };
+        out.row(mean_row(&g, "los_satellites_mean", &per(|k| k.los_mean))?);
+        out.row(mean_row(
+            &g,
+            "shadowed_fraction",
+            &per(|k| k.shadowed_fraction),
+        )?);
+        out.row(mean_row(&g, "flight_duration_s", &per(|k| k.duration_s))?);
+    }
+    // ablations: the same metrics, and paired differences against the main batch's
+    // runs of the same index
+    for (b, a) in c.ablations.iter().enumerate() {
+        let runs = &kept[b + 1];
+        // `check` keeps only the ablations of selected methods.
+        let Some(m) = c.index_of(a.method) else {
+            continue;
+        };
+        let base = format!(
+            "{}@{}",
+            method_row(&c.scenes[a.scene].name, a.method),
+            a.label()
+        );
+        for (k, metric) in MethodStats::METRICS.iter().enumerate() {
+            let v: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k]).collect();
+            out.row(mean_row(&base, metric, &v)?);
+        }
+        for metric in ["rmse_h", "rmse_3d", "rmse_yaw"] {
+            let k = metric_index(metric).unwrap_or(0);
+            let v: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k]).collect();
+            let paired = &values(main, a.scene, m, k)[..v.len()];
+            out.row(diff(format!("{base}-vs-main"), metric, &v, paired)?);
+        }
+    }
+    // The claims compare the methods: made only when every method ran.
+    if c.all_methods() {
+        for claim in claims(out.rows(), c.table2_tolerance) {
+            out.claim(claim);
+        }
+    }
+    per_run_csv(c, main, out)?;
+    figures::write(prep, main_fold, out)?;
+    report::write(prep, main, out);
+    Ok(())
+}
+
+/// `per_run.csv`: every run's statistics per scenario and method.
+fn per_run_csv(c: &Checked, main: &[KeptRun], out: &mut Analysis) -> Result<(), SimError> {
+    let mut headers = vec!["run", "scenario", "method"];
+    let units = [
+        "rmse_h_m",
+        "rmse_3d_m",
+        "rmse_vel_mps",
+        "rmse_roll_deg",
+        "rmse_pitch_deg",
+        "rmse_yaw_deg",
+        "mean_3d_m",
+        "p95_3d_m",
+        "max_att_deg",
+        "time_map_aided_s",
+        "nees_mean",
+    ];
+    headers.extend(units);
+    headers.extend(["gps_updates", "map_updates", "map_failed"]);
+    let mut records = Vec::new();
+    for (i, run) in main.iter().enumerate() {
+        for (s, spec) in c.scenes.iter().enumerate() {
+            for (m, method) in c.methods.iter().enumerate() {
+                let mut rec = vec![
+                    CsvCell::Int(i as i64),
+                    CsvCell::Text(spec.name.clone()),
+                    CsvCell::Text(method.name().into()),
+                ];
+                rec.extend(run[s].stats[m].values().iter().map(|v| CsvCell::Num(*v)));
+                let n = run[s].counts[m];
+                rec.extend(
+                    [n.gps_updates, n.map_updates, n.map_failed].map(|x| CsvCell::Int(x as i64)),
+                );
+                records.push(rec);
+            }
+        }
+    }
+    out.csv_records("per_run.csv", &headers, &records)
+}

@@ -1,0 +1,837 @@
+//! The `urban` scenario checked into the library crates' types ([`Checked`]); fast
+//! and free of I/O (a world file is read by [`super::world`] when preparing).
+
+use fathom_core::units::{
+    deg_per_sqrt_hour_to_rad_per_sqrt_s, deg_to_rad, milli_g_to_mps2, per_sqrt_hour_to_per_sqrt_s,
+};
+use fathom_estimators::map_aided::{
+    GpsAiding, GpsParams, GridPosterior, ImuNoise, Ins12Filter, Ins12Params, Matrix12, MgpmfParams,
+    MgpmfSettings, ParticleParams, ParticleSettings, RangeParams, RangeSettings, SwitchParams,
+    SwitchSettings,
+};
+use fathom_map::ImportSettings;
+use fathom_map::presets::{Bridge, Buildings};
+use fathom_sensors::allan_imu::{AllanImu, AllanImuParams};
+use fathom_sensors::barometer::LinearBaroCalibration;
+use fathom_sensors::map_range::{DetectionParams, LidarParams, RangeSensor, RangeSensorParams};
+use fathom_traj::quadrotor::{FlightParams, Quadrotor, QuadrotorParams, WindParams};
+use nalgebra::Vector3;
+
+use super::nav::Method;
+use super::scenario::{
+    AblationTargetToml, BaroInverse, DetectionToml, LidarToml, PresetWorld, RangefindersToml,
+    Ranging, UrbanScenario,
+};
+use fathom_sim::SimError;
+use fathom_sim::method_list::select;
+use fathom_sim::scenario::{
+    require_experiment, require_in_range, require_non_negative, require_positive,
+};
+
+/// How the filter turns pressure into height above the NED origin.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum BaroConversion {
+    /// Eq. (11).
+    Linear(LinearBaroCalibration),
+    /// The exact inverse of eq. (20).
+    Exact,
+}
+
+/// The barometer and the filter's view of it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BaroSetup {
+    /// Height noise σ of eq. (20), m.
+    pub sigma: f64,
+    /// Height of the NED origin above sea level, m.
+    pub origin_height: f64,
+    /// The filter's conversion.
+    pub conversion: BaroConversion,
+    /// Eq. (11)'s reference heights above the origin, m.
+    pub calibration_heights: [f64; 2],
+    /// Height σ the filter assumes, m.
+    pub filter_sigma: f64,
+}
+
+/// The GNSS settings (the satellites are chosen when preparing).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GnssSetup {
+    /// Receiver parameters with the full nominal constellation.
+    pub params: fathom_sensors::gnss::GnssParams,
+    /// How many satellites to keep.
+    pub satellites: usize,
+}
+
+/// The filters' settings.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct FilterSetup {
+    /// Initial covariance (also the distribution of the initial errors).
+    pub p0: Matrix12,
+    /// IMU noise of the prediction.
+    pub noise: ImuNoise,
+    /// GPS gate.
+    pub gps: GpsAiding,
+    /// GREKF ray casting and gate.
+    pub range: RangeSettings,
+    /// The MGPMF.
+    pub mgpmf: MgpmfSettings,
+    /// The particle filter.
+    pub particle: ParticleSettings,
+    /// The mode switch.
+    pub switch: SwitchSettings,
+    /// Point-mass / particle update rate, Hz.
+    pub grid_rate_hz: f64,
+    /// With the lidar, the grid filters use every `k`-th beam.
+    pub lidar_beam_stride: usize,
+}
+
+/// Where a scenario's world comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WorldSource {
+    /// The bridge preset.
+    Bridge(Bridge),
+    /// The buildings preset.
+    Buildings(Buildings),
+    /// A user's OBJ or STL file.
+    File {
+        /// The path as written in the scenario.
+        path: String,
+        /// How to read it into NED metres.
+        settings: ImportSettings,
+    },
+}
+
+/// One checked `[[scenarios]]` entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneSpec {
+    /// Name.
+    pub name: String,
+    /// The range sensor.
+    pub ranging: Ranging,
+    /// The world.
+    pub world: WorldSource,
+    /// Waypoints in the world's frame (`None`: the preset's path).
+    pub waypoints: Option<Vec<[f64; 3]>>,
+    /// Start height above ground of a preset path, m.
+    pub start_height: f64,
+    /// The paper's scenario this one is (name and preset world match).
+    pub paper: Option<PresetWorld>,
+}
+
+/// What an ablation changes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum AblationKind {
+    /// Glass treated as opaque by the range sensor (the sensor of the ablation).
+    GaussianRanges(Box<RangeSensor>),
+    /// Another lidar step: the sensor and its step in degrees.
+    LidarStep(Box<RangeSensor>, f64),
+    /// The controller flies on the method's estimate.
+    ControlOnEstimate,
+    /// The MGPMF with this posterior covariance instead of the main batch's.
+    GridPosterior(GridPosterior),
+}
+
+/// One ablation batch.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ablation {
+    /// What changes.
+    pub kind: AblationKind,
+    /// Index into [`Checked::scenes`].
+    pub scene: usize,
+    /// The method run.
+    pub method: Method,
+}
+
+impl Ablation {
+    /// Short name used in row names (`buildings/MGPMF@gaussian_ranges`).
+    pub fn label(&self) -> String {
+        match &self.kind {
+            AblationKind::GaussianRanges(_) => "gaussian_ranges".into(),
+            AblationKind::LidarStep(_, step) => format!("lidar_step_{step}deg"),
+            AblationKind::ControlOnEstimate => "control_on_estimate".into(),
+            AblationKind::GridPosterior(GridPosterior::Interpolated) => {
+                "posterior_interpolated".into()
+            }
+            AblationKind::GridPosterior(GridPosterior::Information) => {
+                "posterior_information".into()
+            }
+        }
+    }
+}
+
+/// Whole multiples between the rates (IMU steps per event).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Steps {
+    /// Control steps per IMU step.
+    pub control_per_imu: usize,
+    /// IMU steps per GNSS epoch.
+    pub gnss: usize,
+    /// IMU steps per range-finder epoch.
+    pub rangefinders: usize,
+    /// IMU steps per lidar scan.
+    pub lidar: usize,
+    /// IMU steps per evaluation epoch.
+    pub eval: usize,
+}
+
+/// The checked `urban` scenario.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Checked {
+    /// The scenario file's label (for errors found when preparing).
+    pub file: String,
+    /// Main-batch runs.
+    pub runs: usize,
+    /// `methods`: the methods run, in [`Method::ALL`] order.
+    pub methods: Vec<Method>,
+    /// Ablations left out because their method is not in `methods`.
+    pub ablations_skipped: usize,
+    /// Base seed.
+    pub base_seed: u64,
+    /// The quadrotor.
+    pub quad: Quadrotor,
+    /// Rest at the start, s.
+    pub rest_s: f64,
+    /// Path speeds (horizontal, vertical), m/s, and hover, s.
+    pub speeds: (f64, f64, f64),
+    /// The IMU.
+    pub imu: AllanImu,
+    /// The event clocks.
+    pub steps: Steps,
+    /// GNSS.
+    pub gnss: GnssSetup,
+    /// Barometer.
+    pub baro: BaroSetup,
+    /// Range finders.
+    pub rangefinders: RangeSensor,
+    /// Lidar.
+    pub lidar: RangeSensor,
+    /// Filters.
+    pub filter: FilterSetup,
+    /// Upper end of the histograms, m, and their bins.
+    pub histogram: (f64, usize),
+    /// Relative tolerance of the Table 2 comparison.
+    pub table2_tolerance: f64,
+    /// The scenarios.
+    pub scenes: Vec<SceneSpec>,
+    /// Runs of each ablation batch.
+    pub ablation_runs: usize,
+    /// The ablations.
+    pub ablations: Vec<Ablation>,
+    /// The settings the paper does not give, `(scenario key, value)`, for the report.
+    pub unstated: Vec<(String, String)>,
+}
+
+impl Checked {
+    /// Whether `methods` selects every method (the paper's full experiment).
+    pub fn all_methods(&self) -> bool {
+        self.methods.len() == Method::ALL.len()
+    }
+
+    /// The index of `m` in the records of a run (its place in `methods`).
+    pub fn index_of(&self, m: Method) -> Option<usize> {
+        self.methods.iter().position(|x| *x == m)
+    }
+}
+
+pub(super) fn model_err(file: &str, key: &str, e: impl std::fmt::Display) -> SimError {
+    SimError::invalid(file, key, e.to_string())
+}
+
+/// Events every `rate` Hz on the IMU clock: the whole number of IMU steps.
+fn every(file: &str, key: &str, imu_rate: f64, rate: f64) -> Result<usize, SimError> {
+    require_positive(file, key, rate)?;
+    let n = imu_rate / rate;
+    if (n - n.round()).abs() > 1e-9 || n.round() < 1.0 || n > 1e6 {
+        return Err(SimError::invalid(
+            file,
+            key,
+            format!("{rate} Hz must divide imu.rate_hz = {imu_rate} Hz a whole number of times"),
+        ));
+    }
+    Ok(n.round() as usize)
+}
+
+fn detection(file: &str, key: &str, d: &DetectionToml) -> Result<DetectionParams, SimError> {
+    require_in_range(file, &format!("{key}.p_max"), d.p_max, 0.0, 1.0)?;
+    require_in_range(
+        file,
+        &format!("{key}.full_until_deg"),
+        d.full_until_deg,
+        0.0,
+        90.0,
+    )?;
+    require_in_range(
+        file,
+        &format!("{key}.zero_from_deg"),
+        d.zero_from_deg,
+        d.full_until_deg,
+        90.0,
+    )?;
+    Ok(DetectionParams {
+        p_max: d.p_max,
+        full_until_deg: d.full_until_deg,
+        zero_from_deg: d.zero_from_deg,
+    })
+}
+
+/// The range-finder parameters of `[rangefinders]`.
+pub fn rangefinder_params(file: &str, r: &RangefindersToml) -> Result<RangeSensorParams, SimError> {
+    let mut p = RangeSensorParams::paper_rangefinders();
+    p.max_range_m = require_positive(file, "rangefinders.max_range_m", r.max_range_m)?;
+    p.sigma_floor_m = require_non_negative(file, "rangefinders.sigma_floor_m", r.sigma_floor_m)?;
+    p.sigma_per_m = require_non_negative(file, "rangefinders.sigma_per_m", r.sigma_per_m)?;
+    p.glass_extra_sigma_m = require_non_negative(
+        file,
+        "rangefinders.glass_extra_sigma_m",
+        r.glass_extra_sigma_m,
+    )?;
+    p.opaque_detection = detection(file, "rangefinders.opaque_detection", &r.opaque_detection)?;
+    p.glass_detection = detection(file, "rangefinders.glass_detection", &r.glass_detection)?;
+    p.rate_hz = require_positive(file, "rangefinders.rate_hz", r.rate_hz)?;
+    Ok(p)
+}
+
+/// The lidar parameters of `[lidar]`.
+pub fn lidar_params(file: &str, l: &LidarToml) -> Result<LidarParams, SimError> {
+    let p = LidarParams {
+        first_deg: l.first_deg,
+        last_deg: l.last_deg,
+        step_deg: require_positive(file, "lidar.step_deg", l.step_deg)?,
+        rate_hz: require_positive(file, "lidar.rate_hz", l.rate_hz)?,
+        max_range_m: require_positive(file, "lidar.max_range_m", l.max_range_m)?,
+        sigma_m: require_non_negative(file, "lidar.sigma_m", l.sigma_m)?,
+        glass_extra_sigma_m: require_non_negative(
+            file,
+            "lidar.glass_extra_sigma_m",
+            l.glass_extra_sigma_m,
+        )?,
+        opaque_detection: detection(file, "lidar.opaque_detection", &l.opaque_detection)?,
+        glass_detection: detection(file, "lidar.glass_detection", &l.glass_detection)?,
+    };
+    p.azimuths_rad().map_err(|e| model_err(file, "lidar", e))?;
+    Ok(p)
+}
+
+fn target(
+    file: &str,
+    key: &str,
+    scenario: &str,
+    method: &str,
+    scenes: &[SceneSpec],
+) -> Result<(usize, Method), SimError> {
+    let scene = scenes
+        .iter()
+        .position(|s| s.name == scenario)
+        .ok_or_else(|| {
+            SimError::invalid(
+                file,
+                format!("{key}.scenario"),
+                format!("no [[scenarios]] entry is named {scenario:?}"),
+            )
+        })?;
+    let method = Method::from_name(method).ok_or_else(|| {
+        SimError::invalid(
+            file,
+            format!("{key}.method"),
+            format!(
+                "unknown method {method:?}, expected one of {}",
+                Method::ALL.map(|m| format!("{:?}", m.name())).join(", ")
+            ),
+        )
+    })?;
+    Ok((scene, method))
+}
+
+impl UrbanScenario {
+    /// Validates the scenario (`file` labels errors).
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the key.
+    pub fn check(&self, file: &str) -> Result<Checked, SimError> {
+        require_experiment(file, &self.experiment, "urban")?;
+        if self.runs < 2 {
+            return Err(SimError::invalid(
+                file,
+                "runs",
+                format!(
+                    "needs at least 2 runs for confidence intervals, got {}",
+                    self.runs
+                ),
+            ));
+        }
+        let v = &self.vehicle;
+        let rest_s = require_in_range(file, "vehicle.rest_s", v.rest_s, 1.0, 3600.0)?;
+        let cruise = require_positive(file, "vehicle.cruise_speed_mps", v.cruise_speed_mps)?;
+        let vertical = require_positive(file, "vehicle.vertical_speed_mps", v.vertical_speed_mps)?;
+        let hover = require_non_negative(file, "vehicle.hover_s", v.hover_s)?;
+        let wind = WindParams {
+            mean_in_nav: Vector3::from(v.wind_mean_mps),
+            gust_sigma_mps: Vector3::from(v.gust_sigma_mps),
+            gust_correlation_time_s: require_positive(
+                file,
+                "vehicle.gust_correlation_time_s",
+                v.gust_correlation_time_s,
+            )?,
+        };
+        let quad = QuadrotorParams {
+            wind,
+            flight: FlightParams {
+                control_rate_hz: require_positive(
+                    file,
+                    "vehicle.control_rate_hz",
+                    v.control_rate_hz,
+                )?,
+                physics_substeps: 2,
+                rest_duration_s: rest_s,
+                max_duration_s: 3600.0,
+            },
+            ..QuadrotorParams::default()
+        }
+        .check()
+        .map_err(|e| model_err(file, "vehicle", e))?;
+
+        let i = &self.imu;
+        let imu_rate = require_positive(file, "imu.rate_hz", i.rate_hz)?;
+        let imu = AllanImuParams {
+            arw_deg_per_sqrt_hr: i.arw_deg_per_sqrt_hr,
+            vrw_mps_per_sqrt_hr: i.vrw_mps_per_sqrt_hr,
+            gyro_bias_instability_deg_per_hr: i.gyro_bias_instability_deg_per_hr,
+            accel_bias_instability_mg: i.accel_bias_instability_mg,
+            gyro_turn_on_bias_deg_per_hr: i.gyro_turn_on_bias_deg_per_hr,
+            accel_turn_on_bias_mg: i.accel_turn_on_bias_mg,
+            rate_hz: imu_rate,
+            ..AllanImuParams::adis16448()
+        }
+        .check()
+        .map_err(|e| model_err(file, "imu", e))?;
+        let control_per_imu = every(file, "imu.rate_hz", v.control_rate_hz, imu_rate)?;
+
+        let g = &self.gnss;
+        let satellites = g.satellites;
+        if !(4..=24).contains(&satellites) {
+            return Err(SimError::invalid(
+                file,
+                "gnss.satellites",
+                format!("must be 4 ... 24 (of the nominal constellation), got {satellites}"),
+            ));
+        }
+        require_in_range(file, "gnss.lat_deg", g.lat_deg, -89.0, 89.0)?;
+        require_in_range(file, "gnss.lon_deg", g.lon_deg, -180.0, 180.0)?;
+        require_in_range(file, "gnss.height_m", g.height_m, -500.0, 40_000.0)?;
+        require_in_range(file, "gnss.epoch_offset_s", g.epoch_offset_s, -1e9, 1e9)?;
+        require_in_range(
+            file,
+            "gnss.elevation_mask_deg",
+            g.elevation_mask_deg,
+            0.0,
+            60.0,
+        )?;
+        require_positive(file, "gnss.pseudorange_sigma_m", g.pseudorange_sigma_m)?;
+        require_in_range(
+            file,
+            "gnss.nlos_reception_probability",
+            g.nlos_reception_probability,
+            0.0,
+            1.0,
+        )?;
+        require_non_negative(file, "gnss.nlos_delay_min_m", g.nlos_delay_min_m)?;
+        require_in_range(
+            file,
+            "gnss.nlos_delay_max_m",
+            g.nlos_delay_max_m,
+            g.nlos_delay_min_m,
+            1e6,
+        )?;
+        let gnss_params = fathom_sensors::gnss::GnssParams {
+            frame: fathom_sensors::gnss::LocalFrameParams {
+                lat_deg: g.lat_deg,
+                lon_deg: g.lon_deg,
+                height_m: g.height_m,
+            },
+            epoch_offset_s: g.epoch_offset_s,
+            elevation_mask_deg: g.elevation_mask_deg,
+            pseudorange_sigma_m: g.pseudorange_sigma_m,
+            nlos_reception_probability: g.nlos_reception_probability,
+            nlos_delay_min_m: g.nlos_delay_min_m,
+            nlos_delay_max_m: g.nlos_delay_max_m,
+            rate_hz: g.rate_hz,
+            ..fathom_sensors::gnss::GnssParams::default()
+        };
+        gnss_params
+            .check()
+            .map_err(|e| model_err(file, "gnss", e))?;
+
+        let b = &self.baro;
+        let [h0, h1] = b.calibration_heights_m;
+        let conversion = match b.inverse {
+            BaroInverse::Exact => BaroConversion::Exact,
+            BaroInverse::Linear => BaroConversion::Linear(
+                LinearBaroCalibration::from_reference_heights(h0 + g.height_m, h1 + g.height_m)
+                    .map_err(|e| model_err(file, "baro.calibration_heights_m", e))?,
+            ),
+        };
+        if !(h0.is_finite() && h1.is_finite() && h1 > h0) {
+            return Err(SimError::invalid(
+                file,
+                "baro.calibration_heights_m",
+                format!("must be finite and increasing, got [{h0}, {h1}]"),
+            ));
+        }
+        let baro = BaroSetup {
+            sigma: require_positive(file, "baro.height_noise_sigma_m", b.height_noise_sigma_m)?,
+            origin_height: g.height_m,
+            conversion,
+            calibration_heights: [h0, h1],
+            filter_sigma: require_positive(file, "baro.filter_sigma_m", b.filter_sigma_m)?,
+        };
+
+        let rangefinders = rangefinder_params(file, &self.rangefinders)?
+            .check()
+            .map_err(|e| model_err(file, "rangefinders", e))?;
+        let lidar = lidar_params(file, &self.lidar)?
+            .check()
+            .map_err(|e| model_err(file, "lidar", e))?;
+
+        let f = &self.filter;
+        let mut p0 = Ins12Filter::diagonal_covariance([
+            require_positive(
+                file,
+                "filter.initial_position_sigma_m",
+                f.initial_position_sigma_m,
+            )?,
+            require_positive(
+                file,
+                "filter.initial_velocity_sigma_mps",
+                f.initial_velocity_sigma_mps,
+            )?,
+            deg_to_rad(require_positive(
+                file,
+                "filter.initial_roll_pitch_sigma_deg",
+                f.initial_roll_pitch_sigma_deg,
+            )?),
+            milli_g_to_mps2(require_positive(
+                file,
+                "filter.initial_accel_bias_sigma_mg",
+                f.initial_accel_bias_sigma_mg,
+            )?),
+        ]);
+        p0[(8, 8)] = deg_to_rad(require_positive(
+            file,
+            "filter.initial_yaw_sigma_deg",
+            f.initial_yaw_sigma_deg,
+        )?)
+        .powi(2);
+        let noise = Ins12Params {
+            velocity_random_walk_mps_per_sqrt_s: per_sqrt_hour_to_per_sqrt_s(require_non_negative(
+                file,
+                "filter.vrw_mps_per_sqrt_hr",
+                f.vrw_mps_per_sqrt_hr,
+            )?),
+            angle_random_walk_rad_per_sqrt_s: deg_per_sqrt_hour_to_rad_per_sqrt_s(
+                require_non_negative(file, "filter.arw_deg_per_sqrt_hr", f.arw_deg_per_sqrt_hr)?,
+            ),
+            accel_bias_random_walk_mps2_per_sqrt_s: milli_g_to_mps2(require_non_negative(
+                file,
+                "filter.accel_bias_random_walk_mg_per_sqrt_s",
+                f.accel_bias_random_walk_mg_per_sqrt_s,
+            )?),
+        }
+        .check()
+        .map_err(|e| model_err(file, "filter", e))?;
+        let gps = GpsParams {
+            gate_probability: f.gps_gate_probability,
+        }
+        .check()
+        .map_err(|e| model_err(file, "filter.gps_gate_probability", e))?;
+        let range_params = RangeParams {
+            max_range_m: lidar.max_range().max(rangefinders.max_range()),
+            max_incidence_deg: f.max_incidence_deg,
+            gate_probability: f.range_gate_probability,
+        };
+        let range = range_params
+            .check()
+            .map_err(|e| model_err(file, "filter", e))?;
+        let m = &self.mgpmf;
+        let posterior = match m.posterior.as_deref() {
+            None | Some("interpolated") => GridPosterior::Interpolated,
+            Some("information") => GridPosterior::Information,
+            Some(other) => {
+                return Err(SimError::invalid(
+                    file,
+                    "mgpmf.posterior",
+                    format!("must be \"interpolated\" or \"information\", got {other:?}"),
+                ));
+            }
+        };
+        let mgpmf_params = MgpmfParams {
+            grid_points: m.grid_points,
+            k_sigma: m.k_sigma,
+            outlier_probability: m.outlier_probability,
+            posterior,
+            range: range_params,
+        };
+        let mgpmf = mgpmf_params
+            .check()
+            .map_err(|e| model_err(file, "mgpmf", e))?;
+        let particle = ParticleParams {
+            roughening: self.particle.roughening,
+            ..ParticleParams::with_grid_budget(&mgpmf_params)
+        }
+        .check()
+        .map_err(|e| model_err(file, "particle", e))?;
+        let s = &self.switch;
+        if !(4..=64).contains(&s.min_los_satellites) {
+            return Err(SimError::invalid(
+                file,
+                "switch.min_los_satellites",
+                format!(
+                    "must be 4 ... 64 (a fix needs 4), got {}",
+                    s.min_los_satellites
+                ),
+            ));
+        }
+        let switch = SwitchParams {
+            min_los_satellites: s.min_los_satellites,
+            hysteresis_satellites: s.hysteresis_satellites,
+            min_dwell_s: s.min_dwell_s,
+        }
+        .check()
+        .map_err(|e| model_err(file, "switch", e))?;
+        if m.lidar_beam_stride == 0 || m.lidar_beam_stride > lidar.beams().len() {
+            return Err(SimError::invalid(
+                file,
+                "mgpmf.lidar_beam_stride",
+                format!(
+                    "must be 1 ... {} (the lidar's beams), got {}",
+                    lidar.beams().len(),
+                    m.lidar_beam_stride
+                ),
+            ));
+        }
+        let rangefinder_steps = every(
+            file,
+            "rangefinders.rate_hz",
+            imu_rate,
+            rangefinders.rate_hz(),
+        )?;
+        let lidar_steps = every(file, "lidar.rate_hz", imu_rate, lidar.rate_hz())?;
+        for (key, sensor_rate) in [
+            ("rangefinders.rate_hz", rangefinders.rate_hz()),
+            ("lidar.rate_hz", lidar.rate_hz()),
+        ] {
+            require_positive(file, "mgpmf.rate_hz", m.rate_hz)?;
+            let n = sensor_rate / m.rate_hz;
+            if (n - n.round()).abs() > 1e-9 || n.round() < 1.0 {
+                return Err(SimError::invalid(
+                    file,
+                    "mgpmf.rate_hz",
+                    format!(
+                        "{} Hz must divide {key} = {sensor_rate} Hz a whole number of times",
+                        m.rate_hz
+                    ),
+                ));
+            }
+        }
+        let filter = FilterSetup {
+            p0,
+            noise,
+            gps,
+            range,
+            mgpmf,
+            particle,
+            switch,
+            grid_rate_hz: m.rate_hz,
+            lidar_beam_stride: m.lidar_beam_stride,
+        };
+
+        let e = &self.evaluation;
+        let gnss_steps = every(file, "gnss.rate_hz", imu_rate, g.rate_hz)?;
+        let rest_steps = rest_s * imu_rate;
+        if (rest_steps - rest_steps.round()).abs() > 1e-6
+            || !(rest_steps.round() as usize).is_multiple_of(gnss_steps)
+        {
+            return Err(SimError::invalid(
+                file,
+                "vehicle.rest_s",
+                format!(
+                    "must be a whole number of GNSS periods (1 / gnss.rate_hz), got {rest_s} s"
+                ),
+            ));
+        }
+        let steps = Steps {
+            control_per_imu,
+            gnss: gnss_steps,
+            rangefinders: rangefinder_steps,
+            lidar: lidar_steps,
+            eval: every(file, "evaluation.rate_hz", imu_rate, e.rate_hz)?,
+        };
+        let histogram_max =
+            require_positive(file, "evaluation.histogram_max_m", e.histogram_max_m)?;
+        if !(2..=1000).contains(&e.histogram_bins) {
+            return Err(SimError::invalid(
+                file,
+                "evaluation.histogram_bins",
+                format!("must be 2 ... 1000, got {}", e.histogram_bins),
+            ));
+        }
+        let table2_tolerance = require_in_range(
+            file,
+            "evaluation.table2_tolerance",
+            e.table2_tolerance,
+            0.0,
+            10.0,
+        )?;
+
+        if self.scenarios.is_empty() {
+            return Err(SimError::invalid(
+                file,
+                "scenarios",
+                "needs at least one scenario",
+            ));
+        }
+        let mut scenes: Vec<SceneSpec> = Vec::new();
+        for (k, s) in self.scenarios.iter().enumerate() {
+            let spec = super::check_scene::scene(file, k, s, &scenes)?;
+            scenes.push(spec);
+        }
+
+        let a = &self.ablations;
+        let mut ablations = Vec::new();
+        if let Some(t) = &a.gaussian_ranges {
+            let AblationTargetToml { scenario, method } = t;
+            let (scene, method) =
+                target(file, "ablations.gaussian_ranges", scenario, method, &scenes)?;
+            let opaque_only = |mut p: RangeSensorParams| {
+                p.glass_extra_sigma_m = 0.0;
+                p.glass_detection = p.opaque_detection;
+                p.check()
+                    .map_err(|e| model_err(file, "ablations.gaussian_ranges", e))
+            };
+            let sensor = match scenes[scene].ranging {
+                Ranging::Rangefinders => {
+                    opaque_only(rangefinder_params(file, &self.rangefinders)?)?
+                }
+                Ranging::Lidar => opaque_only(
+                    lidar_params(file, &self.lidar)?
+                        .to_range_params()
+                        .map_err(|e| model_err(file, "lidar", e))?,
+                )?,
+            };
+            ablations.push(Ablation {
+                kind: AblationKind::GaussianRanges(Box::new(sensor)),
+                scene,
+                method,
+            });
+        }
+        if let Some(t) = &a.lidar_step {
+            let (scene, method) = target(
+                file,
+                "ablations.lidar_step",
+                &t.scenario,
+                &t.method,
+                &scenes,
+            )?;
+            if scenes[scene].ranging != Ranging::Lidar {
+                return Err(SimError::invalid(
+                    file,
+                    "ablations.lidar_step.scenario",
+                    format!("scenario {:?} does not fly the lidar", t.scenario),
+                ));
+            }
+            let step = require_positive(file, "ablations.lidar_step.step_deg", t.step_deg)?;
+            let sensor = LidarParams {
+                step_deg: step,
+                ..lidar_params(file, &self.lidar)?
+            }
+            .check()
+            .map_err(|e| model_err(file, "ablations.lidar_step.step_deg", e))?;
+            if sensor.beams().len() > 20_000 {
+                return Err(SimError::invalid(
+                    file,
+                    "ablations.lidar_step.step_deg",
+                    format!("gives {} beams (at most 20000)", sensor.beams().len()),
+                ));
+            }
+            ablations.push(Ablation {
+                kind: AblationKind::LidarStep(Box::new(sensor), step),
+                scene,
+                method,
+            });
+        }
+        if let Some(t) = &a.control_on_estimate {
+            let (scene, method) = target(
+                file,
+                "ablations.control_on_estimate",
+                &t.scenario,
+                &t.method,
+                &scenes,
+            )?;
+            ablations.push(Ablation {
+                kind: AblationKind::ControlOnEstimate,
+                scene,
+                method,
+            });
+        }
+        if let Some(t) = &a.mgpmf_posterior {
+            let key = "ablations.mgpmf_posterior";
+            let (scene, method) = target(file, key, &t.scenario, &t.method, &scenes)?;
+            if method != Method::Mgpmf {
+                return Err(SimError::invalid(
+                    file,
+                    format!("{key}.method"),
+                    format!("must be \"MGPMF\", got {:?}", t.method),
+                ));
+            }
+            let other = match mgpmf.posterior() {
+                GridPosterior::Interpolated => GridPosterior::Information,
+                GridPosterior::Information => GridPosterior::Interpolated,
+            };
+            ablations.push(Ablation {
+                kind: AblationKind::GridPosterior(other),
+                scene,
+                method,
+            });
+        }
+        if !ablations.is_empty() && a.runs < 2 {
+            return Err(SimError::invalid(
+                file,
+                "ablations.runs",
+                format!("needs at least 2 runs, got {}", a.runs),
+            ));
+        }
+        let methods = select(
+            file,
+            "urban",
+            self.methods.as_deref(),
+            &Method::ALL,
+            Method::name,
+        )?;
+        let before = ablations.len();
+        ablations.retain(|a: &Ablation| methods.contains(&a.method));
+        Ok(Checked {
+            file: file.to_string(),
+            runs: self.runs,
+            ablations_skipped: before - ablations.len(),
+            methods,
+            base_seed: self.base_seed,
+            quad,
+            rest_s,
+            speeds: (cruise, vertical, hover),
+            imu,
+            steps,
+            gnss: GnssSetup {
+                params: gnss_params,
+                satellites,
+            },
+            baro,
+            rangefinders,
+            lidar,
+            filter,
+            histogram: (histogram_max, e.histogram_bins),
+            table2_tolerance,
+            scenes,
+            ablation_runs: a.runs.min(self.runs),
+            ablations,
+            unstated: self.unstated(),
+        })
+    }
+}

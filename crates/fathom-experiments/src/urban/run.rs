@@ -1,0 +1,428 @@
+//! One `urban` Monte Carlo run: per scenario, fly the path on the truth, simulate
+//! the sensors once, run every method on the same data and evaluate it; or, in an
+//! ablation batch, one method on one scenario with the ablation's change.
+//!
+//! The run's RNG seeds one stream per sensor ([`Streams`]), drawn in a fixed order,
+//! so a run index gives the same flight, IMU, GNSS, range and baro numbers in every
+//! batch (paired ablations). The initial error is drawn from `P0` once per run and
+//! shared by the methods and scenarios.
+
+use fathom_estimators::map_aided::{ErrorVector12, NavMode};
+use fathom_ins::local_level::LocalTruthSample;
+use fathom_traj::Trajectory;
+use fathom_traj::quadrotor::fly_on_truth;
+use nalgebra::Vector3;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+use super::check::{Ablation, AblationKind, FilterSetup};
+use super::closed_loop;
+use super::nav::{Method, Nav, NavCounts, NavEnv, los_satellites};
+use super::record::{
+    GridSnapshot, MethodRecord, RunRecord, ScanSnapshot, SceneDetail, SceneRecord,
+};
+use super::scenario::Ranging;
+use super::sense::{Sensing, SensorEpoch, Streams};
+use super::trace::Trace;
+use super::world::{Prepared, PreparedScene};
+use fathom_sim::SimError;
+
+/// The initial estimation error drawn from `P0` (position, velocity, attitude; the
+/// bias estimate starts at zero).
+pub(super) fn initial_error(
+    prep: &Prepared,
+    rng: &mut ChaCha8Rng,
+) -> Result<ErrorVector12, SimError> {
+    let l = prep
+        .checked
+        .filter
+        .p0
+        .cholesky()
+        .ok_or_else(|| SimError::invalid_argument("urban P0", "not positive definite"))?
+        .l();
+    let mut z = ErrorVector12::from_fn(|_, _| StandardNormal.sample(rng));
+    for i in 9..12 {
+        z[i] = 0.0;
+    }
+    let mut dx = l * z;
+    dx.fixed_rows_mut::<3>(9).fill(0.0);
+    Ok(dx)
+}
+
+/// The navigation environment of a scenario.
+pub(super) fn nav_env<'a>(
+    prep: &'a Prepared,
+    scene: &'a PreparedScene,
+    ranging: Ranging,
+) -> NavEnv<'a> {
+    let c = &prep.checked;
+    let sensor_steps = match ranging {
+        Ranging::Lidar => c.steps.lidar,
+        Ranging::Rangefinders => c.steps.rangefinders,
+    };
+    let sensor_rate = c.imu.rate_hz() / sensor_steps as f64;
+    NavEnv {
+        map: &scene.caster,
+        frame: prep.receiver.frame(),
+        pseudorange_sigma: c.gnss.params.pseudorange_sigma_m,
+        filter: &c.filter,
+        grid_every: (sensor_rate / c.filter.grid_rate_hz).round().max(1.0) as usize,
+        grid_stride: match ranging {
+            Ranging::Lidar => c.filter.lidar_beam_stride,
+            Ranging::Rangefinders => 1,
+        },
+        gravity: c.quad.vehicle.gravity(),
+    }
+}
+
+/// IMU steps per range epoch of a scenario's sensor.
+pub(super) fn range_every(prep: &Prepared, ranging: Ranging) -> usize {
+    match ranging {
+        Ranging::Lidar => prep.checked.steps.lidar,
+        Ranging::Rangefinders => prep.checked.steps.rangefinders,
+    }
+}
+
+/// Feeds one method the samples of a run: gyro calibration over the rest, start at
+/// its end, then one step per sample with evaluation every `eval` steps.
+pub(super) struct Runner<'e> {
+    env: &'e NavEnv<'e>,
+    method: Method,
+    start: usize,
+    eval: usize,
+    dt: f64,
+    dx0: ErrorVector12,
+    particle_rng: ChaCha8Rng,
+    gyro_sum: Vector3<f64>,
+    gyro_time: f64,
+    nav: Option<Nav>,
+    /// The evaluation so far.
+    pub trace: Trace,
+    /// Keep the MGPMF grid of the first map-aided update at or after this time.
+    pub grid_after: Option<f64>,
+    /// The grid kept.
+    pub grid: Option<GridSnapshot>,
+}
+
+impl<'e> Runner<'e> {
+    /// A runner starting navigation at sample `start`.
+    pub fn new(
+        prep: &Prepared,
+        env: &'e NavEnv<'e>,
+        method: Method,
+        dx0: ErrorVector12,
+        streams: &Streams,
+    ) -> Self {
+        let c = &prep.checked;
+        Self {
+            env,
+            method,
+            start: (c.rest_s * c.imu.rate_hz()).round() as usize,
+            eval: c.steps.eval,
+            dt: c.imu.dt(),
+            dx0,
+            particle_rng: streams.particle.clone(),
+            gyro_sum: Vector3::zeros(),
+            gyro_time: 0.0,
+            nav: None,
+            trace: Trace::default(),
+            grid_after: None,
+            grid: None,
+        }
+    }
+
+    /// The running method (after the start).
+    pub fn nav(&self) -> Option<&Nav> {
+        self.nav.as_ref()
+    }
+
+    /// Sample `j` (time order, `j >= 1`) with the sensor data since sample `j - 1`.
+    ///
+    /// # Errors
+    /// A failing mechanization or prediction, naming the method and time.
+    pub fn feed(
+        &mut self,
+        j: usize,
+        truth: &LocalTruthSample,
+        epoch: &SensorEpoch,
+    ) -> Result<(), SimError> {
+        if j <= self.start {
+            self.gyro_sum += epoch.imu.delta_theta;
+            self.gyro_time += epoch.imu.dt;
+            if j == self.start {
+                let gyro_bias = self.gyro_sum / self.gyro_time.max(1e-12);
+                let est = truth.pos_in_nav + self.dx0.fixed_rows::<3>(0);
+                let mode = match &epoch.gnss {
+                    Some(g)
+                        if los_satellites(self.env, &est, g).1
+                            < self.env.filter.switch.leave_gps_below() =>
+                    {
+                        NavMode::MapAided
+                    }
+                    Some(_) => NavMode::GpsIns,
+                    None => NavMode::MapAided,
+                };
+                self.nav = Some(Nav::new(
+                    self.method,
+                    self.env,
+                    truth,
+                    &self.dx0,
+                    gyro_bias,
+                    mode,
+                    &self.particle_rng,
+                )?);
+            }
+            return Ok(());
+        }
+        let Some(nav) = self.nav.as_mut() else {
+            return Ok(());
+        };
+        let map_updated = nav.step(
+            self.env,
+            &epoch.imu,
+            truth.time,
+            epoch.gnss.as_ref(),
+            epoch.ranges.as_ref(),
+        )?;
+        if nav.map_aided() {
+            self.trace.map_time_s += self.dt;
+        }
+        if map_updated
+            && self.grid.is_none()
+            && self.grid_after.is_some_and(|t| truth.time >= t)
+            && let Some((points, weights)) = nav.last_grid()
+        {
+            self.grid = Some(GridSnapshot::of(
+                truth.time,
+                points,
+                weights,
+                self.env.filter.mgpmf.grid_points(),
+            ));
+        }
+        if (j - self.start).is_multiple_of(self.eval) {
+            let map = nav.map_aided();
+            self.trace
+                .push(&nav.nominal(), nav.covariance(), truth, map);
+        }
+        Ok(())
+    }
+
+    /// The counters of the method.
+    pub fn counts(&self) -> NavCounts {
+        self.nav.as_ref().map(Nav::counts).unwrap_or_default()
+    }
+}
+
+/// The truth at the IMU rate over the whole flight.
+fn sample_truth(
+    prep: &Prepared,
+    scene: &PreparedScene,
+    streams: &Streams,
+) -> Result<Vec<LocalTruthSample>, SimError> {
+    let c = &prep.checked;
+    let traj = fly_on_truth(&c.quad, &scene.path, &mut streams.wind.clone())
+        .map_err(|e| SimError::model("quadrotor flight", e))?;
+    let dt = c.imu.dt();
+    let n = (traj.end_time() / dt + 1e-9).floor() as usize;
+    (0..=n)
+        .map(|k| {
+            let q = traj
+                .quad_state_at((k as f64 * dt).min(traj.end_time()))
+                .map_err(|e| SimError::model("quadrotor truth", e))?;
+            Ok(LocalTruthSample {
+                time: k as f64 * dt,
+                pos_in_nav: q.body.pos_in_nav,
+                vel_in_nav: q.body.vel_in_nav,
+                nav_from_body: q.body.nav_from_body,
+            })
+        })
+        .collect()
+}
+
+/// A scenario flown on the truth: the samples and the sensor data since each.
+struct Flown {
+    truth: Vec<LocalTruthSample>,
+    /// `epochs[j - 1]`: the data of sample `j`.
+    epochs: Vec<SensorEpoch>,
+}
+
+fn fly_and_sense(
+    prep: &Prepared,
+    scene: &PreparedScene,
+    ranging: Ranging,
+    sensor: &fathom_sensors::map_range::RangeSensor,
+    streams: &Streams,
+) -> Result<Flown, SimError> {
+    let truth = sample_truth(prep, scene, streams)?;
+    let mut sensing = Sensing::new(
+        &prep.checked,
+        &scene.caster,
+        &prep.receiver,
+        sensor,
+        range_every(prep, ranging),
+        streams,
+    )?;
+    let mut epochs = Vec::with_capacity(truth.len());
+    for t in &truth {
+        if let Some(e) = sensing.push(t)? {
+            epochs.push(e);
+        }
+    }
+    Ok(Flown { truth, epochs })
+}
+
+fn run_method<'e>(
+    prep: &Prepared,
+    env: &'e NavEnv<'e>,
+    method: Method,
+    flown: &Flown,
+    dx0: ErrorVector12,
+    streams: &Streams,
+    grid_after: Option<f64>,
+) -> Result<Runner<'e>, SimError> {
+    let mut r = Runner::new(prep, env, method, dx0, streams);
+    r.grid_after = grid_after;
+    for (j, epoch) in flown.epochs.iter().enumerate() {
+        r.feed(j + 1, &flown.truth[j + 1], epoch)?;
+    }
+    Ok(r)
+}
+
+/// The record of one method's run.
+pub(super) fn method_record(
+    prep: &Prepared,
+    method: Method,
+    runner: &Runner<'_>,
+) -> Result<MethodRecord, SimError> {
+    let stats = runner.trace.stats().map_err(|e| {
+        SimError::model(
+            format!("evaluating {}", method.name()),
+            Box::new(std::io::Error::other(e.to_string())),
+        )
+    })?;
+    Ok(MethodRecord::new(
+        method,
+        stats,
+        runner.counts(),
+        &runner.trace,
+        prep.checked.histogram,
+    ))
+}
+
+/// The sensor of a scenario.
+fn sensor_of(prep: &Prepared, ranging: Ranging) -> &fathom_sensors::map_range::RangeSensor {
+    match ranging {
+        Ranging::Lidar => &prep.checked.lidar,
+        Ranging::Rangefinders => &prep.checked.rangefinders,
+    }
+}
+
+/// Run `index` of the main batch.
+pub(super) fn main_run(
+    prep: &Prepared,
+    index: usize,
+    rng: &mut ChaCha8Rng,
+) -> Result<RunRecord, SimError> {
+    let mut streams = Streams::from_run(rng);
+    let dx0 = initial_error(prep, &mut streams.init)?;
+    let detail = index == 0;
+    let mut scenes = Vec::with_capacity(prep.scenes.len());
+    let mut details = Vec::new();
+    for (spec, scene) in prep.checked.scenes.iter().zip(&prep.scenes) {
+        let sensor = sensor_of(prep, spec.ranging);
+        let flown = fly_and_sense(prep, scene, spec.ranging, sensor, &streams)?;
+        let env = nav_env(prep, scene, spec.ranging);
+        let start = (prep.checked.rest_s * prep.checked.imu.rate_hz()).round() as usize;
+        let t_end = flown.truth.last().map_or(0.0, |t| t.time);
+        let mid = 0.5 * (flown.truth[start.min(flown.truth.len() - 1)].time + t_end);
+        let mut methods = Vec::new();
+        let mut traces = Vec::new();
+        let mut grid = None;
+        for &method in &prep.checked.methods {
+            let grid_after = (detail && method == Method::Mgpmf).then_some(mid);
+            let r = run_method(prep, &env, method, &flown, dx0, &streams, grid_after)?;
+            methods.push(method_record(prep, method, &r)?);
+            if detail {
+                if r.grid.is_some() {
+                    grid = r.grid.clone();
+                }
+                traces.push(r.trace);
+            }
+        }
+        let gnss: Vec<(f64, usize)> = flown
+            .truth
+            .iter()
+            .skip(1)
+            .zip(&flown.epochs)
+            .filter_map(|(t, e)| e.gnss.as_ref().map(|g| (t.time, g.true_los_count())))
+            .filter(|(t, _)| *t >= flown.truth[start.min(flown.truth.len() - 1)].time)
+            .collect();
+        let threshold = prep.checked.filter.switch.leave_gps_below();
+        scenes.push(SceneRecord::new(methods, &gnss, threshold, t_end));
+        if detail {
+            let scan = flown
+                .truth
+                .iter()
+                .skip(1)
+                .zip(&flown.epochs)
+                .find(|(t, e)| t.time >= mid && e.ranges.is_some())
+                .map(|(t, e)| {
+                    ScanSnapshot::of(t, e.ranges.as_ref().map_or(&[][..], |r| &r.returns))
+                });
+            details.push(SceneDetail::new(
+                &flown.truth,
+                start,
+                prep.checked.steps.eval,
+                traces,
+                gnss,
+                scan,
+                grid,
+            ));
+        }
+    }
+    Ok(RunRecord {
+        scenes,
+        detail: detail.then_some(details),
+    })
+}
+
+/// Run `index` of ablation `ablation`: the ablation's method on its scenario.
+pub(super) fn ablation_run(
+    prep: &Prepared,
+    ablation: &Ablation,
+    rng: &mut ChaCha8Rng,
+) -> Result<RunRecord, SimError> {
+    let mut streams = Streams::from_run(rng);
+    let dx0 = initial_error(prep, &mut streams.init)?;
+    let spec = &prep.checked.scenes[ablation.scene];
+    let scene = &prep.scenes[ablation.scene];
+    let env = nav_env(prep, scene, spec.ranging);
+    let record = match &ablation.kind {
+        AblationKind::GaussianRanges(sensor) | AblationKind::LidarStep(sensor, _) => {
+            let flown = fly_and_sense(prep, scene, spec.ranging, sensor, &streams)?;
+            let r = run_method(prep, &env, ablation.method, &flown, dx0, &streams, None)?;
+            method_record(prep, ablation.method, &r)?
+        }
+        AblationKind::ControlOnEstimate => {
+            closed_loop::fly_on_estimate(prep, &env, ablation, dx0, &streams)?
+        }
+        AblationKind::GridPosterior(posterior) => {
+            let sensor = sensor_of(prep, spec.ranging);
+            let flown = fly_and_sense(prep, scene, spec.ranging, sensor, &streams)?;
+            let filter = FilterSetup {
+                mgpmf: prep.checked.filter.mgpmf.with_posterior(*posterior),
+                ..prep.checked.filter
+            };
+            let env = NavEnv {
+                filter: &filter,
+                ..env
+            };
+            let r = run_method(prep, &env, ablation.method, &flown, dx0, &streams, None)?;
+            method_record(prep, ablation.method, &r)?
+        }
+    };
+    Ok(RunRecord {
+        scenes: vec![SceneRecord::new(vec![record], &[], 0, 0.0)],
+        detail: None,
+    })
+}

@@ -1,0 +1,18 @@
+//! Output layer of fathom: what every run, replay, campaign merge and PILS session
+//! writes, in one format.
+//!
+//! - [`output`]: the `summary.json` contract ([`Summary`](output::Summary), rows and
+//!   claims), CSV series and Markdown / console tables;
+//! - [`plot`]: SVG line, plan-view, histogram, heat-map and sample-time figures;
+//! - [`outdir`]: the output folder that never loses work ([`OutDir`](outdir::OutDir):
+//!   claim before computing, atomic commit, `run_info.json`).
+//!
+//! The crate depends on `fathom-core` only: it draws and writes numbers that the
+//! statistics and the experiments computed.
+
+pub mod error;
+pub mod outdir;
+pub mod output;
+pub mod plot;
+
+pub use error::ReportError;
