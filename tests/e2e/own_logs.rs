@@ -3,11 +3,9 @@
 //! without ground truth; corrupted copies (NaN, time going backwards, a missing or an
 //! unknown column, a missing folder) exit with code 2 and one line naming the file,
 //! line and column; the CMU Plaza data converted into the layout replays to the
-//! `replay plaza` numbers (when `../shared/data/plaza1` exists).
+//! `replay plaza` numbers (the repository's `data/plaza1`).
 
 use std::path::Path;
-
-use fathom::experiments::plaza::find_data_dir;
 
 use crate::support::{fathom, read, repo_root, scratch};
 
@@ -238,7 +236,7 @@ fn missing_plaza_folder_is_an_error_not_an_empty_report() {
     let root = scratch("own-logs-plaza-missing");
     let text = std::fs::read_to_string(repo_root().join("scenarios/plaza.toml"))
         .unwrap()
-        .replace("dir = \"shared/data/plaza1\"", "dir = \"no/such/plaza\"");
+        .replace("dir = \"data/plaza1\"", "dir = \"no/such/plaza\"");
     std::fs::write(root.join("p.toml"), text).unwrap();
     usage_error(&root, &["run", "p.toml", "--out", "o"], &["no/such/plaza"]);
     usage_error(
@@ -255,10 +253,7 @@ fn missing_plaza_folder_is_an_error_not_an_empty_report() {
 
 #[test]
 fn plaza_through_the_layout_gives_the_plaza_numbers() {
-    let Some(plaza) = find_data_dir(&repo_root(), "shared/data/plaza1") else {
-        eprintln!("skipped: shared/data/plaza1 not found beside the repository");
-        return;
-    };
+    let plaza = repo_root().join("data/plaza1");
     let root = scratch("own-logs-plaza");
     let p = plaza.display().to_string();
     ok(&root, &["log", "from-plaza", &p, "p-csv"]);

@@ -1,25 +1,21 @@
 //! End-to-end tests of the `plaza` replay on real data, on copies of Plaza1 made at test
-//! time from `../shared/data/plaza1` into a temporary folder (the data is never
-//! committed): the experiment's contract outputs on a truncated copy (600 s), and on
-//! whole-log copies the acceptance numbers and the invariance of every error to
-//! renumbered beacons and a clock shifted by +10000 s. Tests that need the data skip
-//! with a message when the folder is absent.
+//! time from the repository's `data/plaza1` into a temporary folder (edited copies are
+//! never committed): the experiment's contract outputs on a truncated copy (600 s), and
+//! on whole-log copies the acceptance numbers and the invariance of every error to
+//! renumbered beacons and a clock shifted by +10000 s.
 
 use std::path::{Path, PathBuf};
 
 use fathom::data::matv5::{NamedMatrix, write_mat_v5};
 use fathom::data::plaza::{PlazaFiles, PlazaLog, read_mat};
-use fathom::experiments::plaza::find_data_dir;
 use fathom::replay::plaza::{PlazaReplay, parse_settings, replay};
 
 use crate::support::{preset, repo_root, run_experiment, scratch, write_scenario};
 
-/// The Plaza1 folder beside the repository (or an ancestor), if present.
-fn plaza1() -> Option<PathBuf> {
-    let dir = find_data_dir(&repo_root(), "shared/data/plaza1");
-    if dir.is_none() {
-        eprintln!("skipped: shared/data/plaza1 not found beside the repository");
-    }
+/// The repository's copy of Plaza1 (data/plaza1).
+fn plaza1() -> PathBuf {
+    let dir = repo_root().join("data/plaza1");
+    assert!(dir.is_dir(), "{} is missing", dir.display());
     dir
 }
 
@@ -106,7 +102,7 @@ fn replay_dir(dir: &Path) -> PlazaReplay {
 
 #[test]
 fn experiment_runs_on_a_truncated_copy_and_writes_the_contract_outputs() {
-    let Some(src) = plaza1() else { return };
+    let src = plaza1();
     let root = scratch("plaza-contract");
     let data = root.join("data").join("plaza1-600s");
     make_copy(
@@ -119,7 +115,7 @@ fn experiment_runs_on_a_truncated_copy_and_writes_the_contract_outputs() {
         },
     );
     let scenario = preset("plaza.toml").replace(
-        "dir = \"shared/data/plaza1\"",
+        "dir = \"data/plaza1\"",
         &format!("dir = {:?}", data.to_str().unwrap()),
     );
     write_scenario(&root, "plaza.toml", &scenario);
@@ -193,7 +189,7 @@ fn experiment_runs_on_a_truncated_copy_and_writes_the_contract_outputs() {
 
 #[test]
 fn renumbered_beacons_and_shifted_clock_give_identical_errors() {
-    let Some(src) = plaza1() else { return };
+    let src = plaza1();
     let root = scratch("plaza-invariance");
     let plain = root.join("plain");
     let moved = root.join("moved");
@@ -277,10 +273,8 @@ fn renumbered_beacons_and_shifted_clock_give_identical_errors() {
 #[test]
 fn missing_data_folder_skips_the_experiment() {
     let root = scratch("plaza-skip");
-    let scenario = preset("plaza.toml").replace(
-        "dir = \"shared/data/plaza1\"",
-        "dir = \"no/such/plaza/folder\"",
-    );
+    let scenario =
+        preset("plaza.toml").replace("dir = \"data/plaza1\"", "dir = \"no/such/plaza/folder\"");
     write_scenario(&root, "plaza.toml", &scenario);
     let result = run_experiment(&root, "plaza", Some(1)).unwrap();
     let summary = &result.experiments[0].summary;

@@ -1,35 +1,28 @@
 //! End-to-end tests of `smooth = true` (issue #24, the RTS smoother as post-processing):
-//! on the whole CMU Plaza1 log (from `../shared/data/plaza1`; skipped with a message when
-//! absent) the smoothed rows sit beside the filtered ones with the GTSAM batch reference,
+//! on the whole CMU Plaza1 log (the repository's copy, `data/plaza1`) the smoothed rows sit beside the filtered ones with the GTSAM batch reference,
 //! the filtered results are unchanged by recording, and the acceptance target holds; on
 //! reduced `beacons` and `vkf` scenarios the smoothed rows with CIs are added and every
 //! filtered row stays as it was.
 
-use fathom::experiments::plaza::{
-    GTSAM_BATCH_M, MAIN_METHODS, SMOOTHED_TARGET_M, find_data_dir, smoothed_name,
-};
+use fathom::experiments::plaza::{GTSAM_BATCH_M, MAIN_METHODS, SMOOTHED_TARGET_M, smoothed_name};
 use fathom::replay::plaza::{PlazaReplay, parse_settings, replay};
 
 use crate::support::{preset, repo_root, run_experiment, scratch, write_scenario};
 
-/// The preset with `smooth` set and the data folder made absolute (`None`: no data).
-fn plaza_scenario(smooth: bool) -> Option<String> {
-    let Some(dir) = find_data_dir(&repo_root(), "shared/data/plaza1") else {
-        eprintln!("skipped: shared/data/plaza1 not found beside the repository");
-        return None;
-    };
+/// The preset with `smooth` set and the data folder (the repository's copy) made
+/// absolute.
+fn plaza_scenario(smooth: bool) -> String {
+    let dir = repo_root().join("data/plaza1");
     let text = preset("plaza.toml");
     assert!(
         text.contains("\nsmooth = false\n"),
         "the preset does not smooth"
     );
-    Some(
-        text.replace("\nsmooth = false\n", &format!("\nsmooth = {smooth}\n"))
-            .replace(
-                "dir = \"shared/data/plaza1\"",
-                &format!("dir = {:?}", dir.to_str().unwrap()),
-            ),
-    )
+    text.replace("\nsmooth = false\n", &format!("\nsmooth = {smooth}\n"))
+        .replace(
+            "dir = \"data/plaza1\"",
+            &format!("dir = {:?}", dir.to_str().unwrap()),
+        )
 }
 
 fn replay_with(text: &str) -> PlazaReplay {
@@ -44,9 +37,7 @@ fn replay_with(text: &str) -> PlazaReplay {
 
 #[test]
 fn plaza_smoothing_leaves_the_filters_alone_and_beats_them() {
-    let (Some(off), Some(on)) = (plaza_scenario(false), plaza_scenario(true)) else {
-        return;
-    };
+    let (off, on) = (plaza_scenario(false), plaza_scenario(true));
     let a = replay_with(&off);
     let b = replay_with(&on);
     assert_eq!(a.methods.len(), b.methods.len());
@@ -85,9 +76,7 @@ fn plaza_smoothing_leaves_the_filters_alone_and_beats_them() {
 
 #[test]
 fn plaza_smoothed_rows_report_and_files() {
-    let Some(on) = plaza_scenario(true) else {
-        return;
-    };
+    let on = plaza_scenario(true);
     let root = scratch("smoother-plaza");
     write_scenario(&root, "plaza.toml", &on);
     let result = run_experiment(&root, "plaza", Some(1)).unwrap();

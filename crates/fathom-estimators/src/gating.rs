@@ -1,10 +1,23 @@
 //! Innovation gating: the normalized innovation squared (NIS) and checked gate
 //! thresholds (squared sigma distance or chi-square probability).
 
-use crate::{EstimatorError, kalman::UpdateInfo};
+use crate::EstimatorError;
 use fathom_core::{CoreError, error::ensure_finite};
 use nalgebra::{SMatrix, SVector};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
+
+/// Diagnostics of an applied update: innovation `nu`, its covariance
+/// `S = H P H^T + R` and the NIS `nu^T S^-1 nu`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct UpdateInfo<const M: usize> {
+    /// Innovation `nu = z - H x` (or the one given to the `*_with_innovation` updates).
+    pub innovation: SVector<f64, M>,
+    /// Innovation covariance `S = H P^- H^T + R` (symmetrized).
+    pub innovation_cov: SMatrix<f64, M, M>,
+    /// Normalized innovation squared `nu^T S^-1 nu` (chi-square with `M` dof when
+    /// the filter is consistent).
+    pub nis: f64,
+}
 
 /// A checked gate threshold on the NIS `nu^T S^-1 nu`: a measurement is accepted
 /// when `NIS <= nis_max` and rejected otherwise (NaN NIS is rejected).

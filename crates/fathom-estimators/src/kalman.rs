@@ -5,7 +5,7 @@
 use crate::{
     EstimatorError, MeasurementNoise, ProcessNoise,
     error::check_finite_entries,
-    gating::{Gate, GateThreshold},
+    gating::{Gate, GateThreshold, UpdateInfo},
     lanes::Isa,
     linalg, simd,
 };
@@ -14,19 +14,6 @@ use fathom_core::{
     gaussian::{SYMMETRY_TOLERANCE, check_covariance, symmetrize},
 };
 use nalgebra::{Matrix1, RowSVector, SMatrix, SVector};
-
-/// Diagnostics of an applied update: innovation `nu`, its covariance
-/// `S = H P H^T + R` and the NIS `nu^T S^-1 nu`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct UpdateInfo<const M: usize> {
-    /// Innovation `nu = z - H x` (or the one given to the `*_with_innovation` updates).
-    pub innovation: SVector<f64, M>,
-    /// Innovation covariance `S = H P^- H^T + R` (symmetrized).
-    pub innovation_cov: SMatrix<f64, M, M>,
-    /// Normalized innovation squared `nu^T S^-1 nu` (chi-square with `M` dof when
-    /// the filter is consistent).
-    pub nis: f64,
-}
 
 /// One scalar measurement for [`KalmanFilter::update_sequential_scalar_with`]:
 /// innovation `nu = z - h(x)`, Jacobian row `h` and noise variance `r`.

@@ -7,7 +7,7 @@ use mavlink::dialects::common::MavMessage;
 
 use crate::codec::{
     ImuReading, RangeWire, decode_distance, decode_gps, decode_imu, decode_initial, decode_scan,
-    epoch_from_parts,
+    encode_epoch, epoch_from_parts, time_to_usec,
 };
 use crate::epoch::{Epoch, GpsReading, InitialEstimate};
 
@@ -117,4 +117,28 @@ impl StepParts {
             self.ranges,
         ))
     }
+}
+
+/// The epochs as the navigation receives them over a lossless link:
+/// `decode(encode(e))` for each, with the step lengths from the time stamps (the
+/// offline run's MAVLink quantization setting).
+pub fn quantize_epochs(
+    epochs: &[Epoch],
+    frame: &LocalFrame,
+    wire: &RangeWire,
+    t0: f64,
+) -> Vec<Epoch> {
+    let mut prev = time_to_usec(t0);
+    epochs
+        .iter()
+        .map(|e| {
+            let mut a = StepParts::default();
+            for m in encode_epoch(e, frame, wire) {
+                a.add(&m, frame, wire);
+            }
+            let out = a.into_epoch(e.step, prev, wire);
+            prev = time_to_usec(e.time);
+            out.unwrap_or_else(|| e.clone())
+        })
+        .collect()
 }

@@ -3,7 +3,7 @@
 //! (`HIL_SENSOR`, `HIL_GPS`, `DISTANCE_SENSOR`, `OBSTACLE_DISTANCE`, `ODOMETRY`) and
 //! decoded back. The navigation process decodes what arrives with these functions,
 //! and the offline run with MAVLink quantization passes its measurements through
-//! `decode(encode(x))` ([`quantize_epochs`]), so the two see the same numbers bit
+//! `decode(encode(x))` ([`crate::assemble::quantize_epochs`]), so the two see the same numbers bit
 //! for bit (docs/pils.md lists every field, unit and resolution).
 
 use fathom_sensors::gnss::LocalFrame;
@@ -368,30 +368,6 @@ pub fn epoch_from_parts(
         gps,
         ranges,
     }
-}
-
-/// The epochs as the navigation receives them over a lossless link:
-/// `decode(encode(e))` for each, with the step lengths from the time stamps (the
-/// offline run's MAVLink quantization setting).
-pub fn quantize_epochs(
-    epochs: &[Epoch],
-    frame: &LocalFrame,
-    wire: &RangeWire,
-    t0: f64,
-) -> Vec<Epoch> {
-    let mut prev = time_to_usec(t0);
-    epochs
-        .iter()
-        .map(|e| {
-            let mut a = crate::assemble::StepParts::default();
-            for m in encode_epoch(e, frame, wire) {
-                a.add(&m, frame, wire);
-            }
-            let out = a.into_epoch(e.step, prev, wire);
-            prev = time_to_usec(e.time);
-            out.unwrap_or_else(|| e.clone())
-        })
-        .collect()
 }
 
 fn upper_triangle(m: &nalgebra::Matrix6<f64>) -> [f32; 21] {

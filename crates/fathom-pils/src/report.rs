@@ -8,7 +8,8 @@ use fathom_core::units::wrap_pi;
 use serde::Serialize;
 
 use crate::PilsError;
-use crate::codec::{quantize_epochs, quantize_initial, quantize_solution};
+use crate::assemble::quantize_epochs;
+use crate::codec::{quantize_initial, quantize_solution};
 use crate::epoch::Solution;
 use crate::scenario::{IMU_DT, MapAidedNav, Method, Navigator, SensorSource, Shared, SimulatedRun};
 use crate::stats::{LinkCounters, Percentiles};

@@ -7,7 +7,7 @@ use fathom_stats::{clopper_pearson, mean_and_ci95};
 use super::paper::{PAPER_INJECTED, PAPER_TABLE13, PAPER_TABLE14};
 use super::run::{BatchSums, KeptStats};
 use super::scenario::Checked;
-use super::{MAIN_CASE, figures, method, report};
+use super::{MAIN_CASE, method};
 use fathom_report::output::{Claim, Row, fixed as f};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
@@ -136,15 +136,27 @@ fn push_rows(out: &mut Analysis, m: &str, t: &SchemeTable, paper: (Option<[f64; 
     out.row(Row::new(m, "false_rejections", fr.mean).with_ci95(fr.ci[0], fr.ci[1]));
 }
 
-/// Computes the rows, the claims, the figures and the report; `layouts[k]` holds the
-/// runs of layout `k` of the geometry sensitivity (main case only).
+/// What the figures and the report are drawn from, besides the runs.
+pub(super) struct Analysed {
+    /// Per case and scheme, the aggregated statistics.
+    pub(super) table: Table,
+    /// Per geometry layout and scheme (main case).
+    pub(super) layout_tables: Table,
+    /// The report section of the RTS-smoothed rows (empty without `smooth`).
+    pub(super) smoothed_md: String,
+    /// Every update scheme ran (the claims and the full report need all three).
+    pub(super) all_schemes: bool,
+}
+
+/// Computes the rows and the claims; `layouts[k]` holds the runs of layout `k` of the
+/// geometry sensitivity (main case only).
 pub(super) fn analyse(
     checked: &Checked,
     per_run: &[Vec<Vec<KeptStats>>],
     sums: &BatchSums,
     layouts: &[(&[Vec<Vec<KeptStats>>], &BatchSums)],
     out: &mut Analysis,
-) -> Result<(), SimError> {
+) -> Result<Analysed, SimError> {
     let schemes = &checked.schemes;
     let mut table: Table = Vec::new();
     for (ci, case) in checked.cases.iter().enumerate() {
@@ -174,23 +186,21 @@ pub(super) fn analyse(
         layout_tables.push(row);
     }
 
-    let smoothed = if checked.smooth {
+    let smoothed_md = if checked.smooth {
         smoothed_rows(checked, per_run, out)?
     } else {
         String::new()
     };
-    let all = checked.schemes.len() == UpdateScheme::ALL.len();
-    if all {
+    let all_schemes = checked.schemes.len() == UpdateScheme::ALL.len();
+    if all_schemes {
         claims(checked, &table, per_run, out)?;
     }
-    figures::write(checked, per_run, sums, out)?;
-    if all {
-        report::write(checked, &table, per_run, sums, &layout_tables, out);
-    } else {
-        report::write_subset(checked, &table, &layout_tables, out);
-    }
-    out.report(&smoothed);
-    Ok(())
+    Ok(Analysed {
+        table,
+        layout_tables,
+        smoothed_md,
+        all_schemes,
+    })
 }
 
 /// Method name of a smoothed scheme on a case (`SC+RTS/high`).

@@ -133,6 +133,15 @@ impl Experiment for Beacons {
             .map(Vec::as_slice)
             .zip(&folds[1..])
             .collect();
-        analysis::analyse(checked, per_run, sums, &layouts, out)
+        // One direction: analysis (rows, claims), then figures, then report.
+        let a = analysis::analyse(checked, per_run, sums, &layouts, out)?;
+        figures::write(checked, per_run, sums, out)?;
+        if a.all_schemes {
+            report::write(checked, &a.table, per_run, sums, &a.layout_tables, out);
+        } else {
+            report::write_subset(checked, &a.table, &a.layout_tables, out);
+        }
+        out.report(&a.smoothed_md);
+        Ok(())
     }
 }

@@ -1,6 +1,6 @@
 //! The `fusion` analysis: per-method metrics over runs (Tables 2 and 3), the EFF
 //! feedback's effect on the INS integrator, the sensitivity sweeps, the claims with
-//! paired CIs, and the calls into the figures and the report.
+//! paired CIs. The figures and the report are drawn afterwards from [`Analysed`].
 
 use fathom_stats::{mean_and_ci95, paired_mean_ci};
 use rand_chacha::ChaCha8Rng;
@@ -8,11 +8,9 @@ use rand_chacha::ChaCha8Rng;
 use super::Prepared;
 use super::scenario::FusionSetup;
 use super::sim::{self, Method, MethodMetrics, Reading, RunConfig, RunOutput, method_metrics};
-use super::{figures, report};
 use fathom_report::output::{Claim, Row};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
-use fathom_sim::montecarlo::run_rng;
 use fathom_traj::FusionMission;
 
 /// Table 2 (3D) and Table 3 (2D): `(mean_3d, std_3d, mean_2d, std_2d)`.
@@ -189,12 +187,75 @@ pub(super) const UNITS: [(&str, &str); 7] = [
     ("ins_integrator_max_err", "m"),
 ];
 
-/// Computes the rows, the claims, the extra keys, the figures and the report.
+/// What the figures and the report are drawn from: the main batch of both readings
+/// (run 0 of the main batch is the detail run: it keeps its paths) and the sweeps.
+pub(super) struct Analysed {
+    /// The scenario's reading's main batch.
+    pub(super) results: Vec<RunResult>,
+    /// The other reading's main batch.
+    pub(super) other: Vec<RunResult>,
+    /// Every sweep of both readings.
+    pub(super) sweeps: Vec<SweepResult>,
+}
+
+impl Analysed {
+    /// Both readings' runs and sweeps, the scenario's reading first.
+    pub(super) fn readings<'a>(&'a self, p: &'a Prepared) -> [ReadingRuns<'a>; 2] {
+        let primary = p.setup.run.tuning.reading;
+        [
+            ReadingRuns {
+                reading: primary,
+                cfg: &p.setup.run,
+                results: &self.results,
+                sweeps: self
+                    .sweeps
+                    .iter()
+                    .filter(|s| s.reading == primary)
+                    .collect(),
+            },
+            ReadingRuns {
+                reading: p.other.tuning.reading,
+                cfg: &p.other,
+                results: &self.other,
+                sweeps: self
+                    .sweeps
+                    .iter()
+                    .filter(|s| s.reading != primary)
+                    .collect(),
+            },
+        ]
+    }
+}
+
+/// The sweeps as JSON (`summary.json` extra key `sensitivity`): per reading, per
+/// sweep, the values and each method's mean 3D error.
+fn sweeps_json(sweeps: &[&SweepResult]) -> serde_json::Value {
+    let mut out = serde_json::Map::new();
+    for s in sweeps {
+        let mut per_method = serde_json::Map::new();
+        for (j, m) in SWEEP_METHODS.iter().enumerate() {
+            let means: Vec<f64> = s.means.iter().map(|row| row[j].0).collect();
+            per_method.insert(m.name().into(), serde_json::json!(means));
+        }
+        let entry = out
+            .entry(s.reading.name())
+            .or_insert_with(|| serde_json::json!({}));
+        if let Some(obj) = entry.as_object_mut() {
+            obj.insert(
+                s.key.into(),
+                serde_json::json!({"values": s.values, "mean_3d": per_method}),
+            );
+        }
+    }
+    serde_json::Value::Object(out)
+}
+
+/// Computes the rows, the claims and the extra keys.
 pub(super) fn analyse(
     p: &Prepared,
     mut records: Vec<Vec<RunResult>>,
     out: &mut Analysis,
-) -> Result<(), SimError> {
+) -> Result<Analysed, SimError> {
     let (setup, mission) = (&p.setup, &p.mission);
     let sweeps = sweep_results(p, &records[super::FIRST_SWEEP..])?;
     let other = std::mem::take(&mut records[super::OTHER]);
@@ -203,15 +264,6 @@ pub(super) fn analyse(
     for (metric, unit) in UNITS {
         out.unit(metric, unit);
     }
-    // Run 0 again, keeping the paths for the figures (same stream: same numbers).
-    let run0 = run_once(
-        setup,
-        &setup.run,
-        mission,
-        &Method::ALL,
-        true,
-        &mut run_rng(setup.base_seed, 0),
-    )?;
     for (reading, runs) in [(primary, &results), (p.other.tuning.reading, &other)] {
         for m in Method::ALL {
             let paper = paper_values(m);
@@ -256,27 +308,13 @@ pub(super) fn analyse(
         serde_json::json!(mission.course_changes()),
     );
     let sweep_refs: Vec<&SweepResult> = sweeps.iter().collect();
-    out.extra("sensitivity", report::sweeps_json(&sweep_refs));
+    out.extra("sensitivity", sweeps_json(&sweep_refs));
     out.extra("primary_reading", serde_json::json!(primary.name()));
-    let readings = [
-        ReadingRuns {
-            reading: primary,
-            cfg: &setup.run,
-            results: &results,
-            sweeps: sweeps.iter().filter(|s| s.reading == primary).collect(),
-        },
-        ReadingRuns {
-            reading: p.other.tuning.reading,
-            cfg: &p.other,
-            results: &other,
-            sweeps: sweeps.iter().filter(|s| s.reading != primary).collect(),
-        },
-    ];
-
-    figures::write_all(out, setup, mission, &results, &run0, &sweep_refs)?;
-    let section = report::section(setup, mission, &readings)?;
-    out.report(&section);
-    Ok(())
+    Ok(Analysed {
+        results,
+        other,
+        sweeps,
+    })
 }
 
 /// Whether `a` beats every method in `others` on `metric` (paired 95 % CI of the

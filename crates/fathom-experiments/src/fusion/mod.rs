@@ -167,16 +167,18 @@ impl Experiment for Fusion {
         &self,
         p: &Prepared,
         batch: usize,
-        _index: usize,
+        index: usize,
         rng: &mut ChaCha8Rng,
     ) -> Result<RunResult, SimError> {
         match batch {
+            // Run 0 of the main batch is the detail run: it keeps the paths the
+            // figures draw (the numbers do not depend on it).
             0 => run_once(
                 &p.setup,
                 &p.setup.run,
                 &p.mission,
                 &p.setup.methods,
-                false,
+                index == 0,
                 rng,
             ),
             OTHER => run_once(&p.setup, &p.other, &p.mission, &Method::ALL, false, rng),
@@ -210,7 +212,17 @@ impl Experiment for Fusion {
         out: &mut Analysis,
     ) -> Result<(), SimError> {
         if p.setup.all_methods() {
-            analysis::analyse(p, records, out)
+            // One direction: analysis (rows, claims), then figures, then report.
+            let a = analysis::analyse(p, records, out)?;
+            let sweeps: Vec<&analysis::SweepResult> = a.sweeps.iter().collect();
+            let detail = a
+                .results
+                .first()
+                .ok_or_else(|| SimError::invalid_argument("fusion", "the main batch has no run"))?;
+            figures::write_all(out, &p.setup, &p.mission, &a.results, detail, &sweeps)?;
+            let section = report::section(&p.setup, &p.mission, &a.readings(p))?;
+            out.report(&section);
+            Ok(())
         } else {
             subset::analyse(p, records, out)
         }

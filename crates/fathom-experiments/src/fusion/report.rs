@@ -23,29 +23,6 @@ fn signed_ci(mean: f64, c: [f64; 2]) -> String {
     format!("{:+.2e} [{:+.2e}, {:+.2e}]", mean, c[0], c[1])
 }
 
-/// The sweeps as JSON (`summary.json` extra key `sensitivity`): per reading, per
-/// sweep, the values and each method's mean 3D error.
-pub(super) fn sweeps_json(sweeps: &[&SweepResult]) -> serde_json::Value {
-    let mut out = serde_json::Map::new();
-    for s in sweeps {
-        let mut per_method = serde_json::Map::new();
-        for (j, m) in SWEEP_METHODS.iter().enumerate() {
-            let means: Vec<f64> = s.means.iter().map(|row| row[j].0).collect();
-            per_method.insert(m.name().into(), serde_json::json!(means));
-        }
-        let entry = out
-            .entry(s.reading.name())
-            .or_insert_with(|| serde_json::json!({}));
-        if let Some(obj) = entry.as_object_mut() {
-            obj.insert(
-                s.key.into(),
-                serde_json::json!({"values": s.values, "mean_3d": per_method}),
-            );
-        }
-    }
-    serde_json::Value::Object(out)
-}
-
 /// Largest `|a - b|` of the sweep means over the sweep values.
 fn max_gap(sw: &SweepResult, a: Method, b: Method) -> f64 {
     let ja = SWEEP_METHODS.iter().position(|&x| x == a);

@@ -8,7 +8,6 @@ use nalgebra::DMatrix;
 use super::paper::paper_matrix;
 use super::run::{LongRun, long_run};
 use super::scenario::Checked;
-use super::{figures, report};
 use fathom_report::output::{Claim, Row, fixed as f};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
@@ -64,12 +63,13 @@ pub(super) struct CaseResult {
     pub(super) long: LongRun,
 }
 
-/// Computes the rows, the claims, the figures and the report.
+/// Computes the rows and the claims, and returns the per-case results the figures
+/// and the report are drawn from.
 pub(super) fn analyse(
     checked: &Checked,
     per_run: &[Vec<DMatrix<f64>>],
     out: &mut Analysis,
-) -> Result<(), SimError> {
+) -> Result<Vec<CaseResult>, SimError> {
     let n_cases = checked.cases.len();
     // Distinct entries (upper triangle) over all cases: the family for the
     // simultaneous (Bonferroni) intervals used by the claim.
@@ -222,7 +222,5 @@ pub(super) fn analyse(
         ));
     }
 
-    figures::write(checked, per_run, &results, out)?;
-    report::write(checked, &results, out);
-    Ok(())
+    Ok(results)
 }

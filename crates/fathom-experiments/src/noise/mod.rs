@@ -103,6 +103,10 @@ impl Experiment for Noise {
         out: &mut Analysis,
     ) -> Result<(), SimError> {
         let per_run = records.swap_remove(0);
-        analysis::analyse(checked, &per_run, out)
+        // One direction: analysis (rows, claims), then figures, then report.
+        let results = analysis::analyse(checked, &per_run, out)?;
+        figures::write(checked, &per_run, &results, out)?;
+        report::write(checked, &results, out);
+        Ok(())
     }
 }

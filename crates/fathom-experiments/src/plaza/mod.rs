@@ -1,12 +1,11 @@
 //! The `plaza` experiment: range-beacon localization on real data, the CMU Plaza1 log
-//! (see `shared/data/plaza1/README.md`), with dead reckoning, AS / SC / SI and
+//! (`data/plaza1/README.md`: source and licence), with dead reckoning, AS / SC / SI and
 //! ablations ([`fathom_replay::plaza`]).
 //!
-//! The data is not part of the repository. The folder named by `[data] dir` in
-//! `scenarios/plaza.toml` (default `shared/data/plaza1`) is looked up inside the
-//! base directory (the workspace root; the current directory for `fathom run`) and
-//! beside each of its ancestors, so a checkout next to `shared/` finds
-//! `../shared/data/plaza1`. When it is absent, `fathom run` refuses the scenario (a
+//! The data ships in the repository. The folder named by `[data] dir` in
+//! `scenarios/plaza.toml` (default `data/plaza1`) is looked up inside the base
+//! directory (the workspace root; the current directory for `fathom run`) and beside
+//! each of its ancestors. When it is absent, `fathom run` refuses the scenario (a
 //! user error naming `data.dir`); `cargo xtask paper` (whose environment sets
 //! `skip_missing_data`) **skips** the experiment: it has no batch to run, its summary
 //! has no rows (`runs = 0`) and the report says why.
@@ -194,22 +193,22 @@ mod tests {
         let _ = std::fs::remove_dir_all(&base);
         let root = base.join("a").join("repo");
         std::fs::create_dir_all(&root).unwrap();
-        assert_eq!(find_data_dir(&root, "shared/data/x"), None);
-        std::fs::create_dir_all(base.join("shared/data/x")).unwrap();
+        assert_eq!(find_data_dir(&root, "outside/data/x"), None);
+        std::fs::create_dir_all(base.join("outside/data/x")).unwrap();
         assert_eq!(
-            find_data_dir(&root, "shared/data/x"),
-            Some(base.join("shared/data/x"))
+            find_data_dir(&root, "outside/data/x"),
+            Some(base.join("outside/data/x"))
         );
         // Inside the root (a user's `data/` next to their scenario) counts, and wins
         // over the same name further up.
         std::fs::create_dir_all(root.join("inside")).unwrap();
         assert_eq!(find_data_dir(&root, "inside"), Some(root.join("inside")));
-        std::fs::create_dir_all(root.join("shared/data/x")).unwrap();
+        std::fs::create_dir_all(root.join("outside/data/x")).unwrap();
         assert_eq!(
-            find_data_dir(&root, "shared/data/x"),
-            Some(root.join("shared/data/x"))
+            find_data_dir(&root, "outside/data/x"),
+            Some(root.join("outside/data/x"))
         );
-        let abs = base.join("shared/data/x");
+        let abs = base.join("outside/data/x");
         assert_eq!(find_data_dir(&root, abs.to_str().unwrap()), Some(abs));
     }
 }

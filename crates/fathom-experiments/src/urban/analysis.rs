@@ -11,7 +11,6 @@ use super::paper::paper_value;
 use super::record::{BatchFold, KeptRun};
 use super::trace::MethodStats;
 use super::world::Prepared;
-use super::{figures, report};
 use fathom_report::output::{CsvCell, Row};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
@@ -39,7 +38,7 @@ fn diff(method: String, metric: &str, a: &[f64], b: &[f64]) -> Result<Row, SimEr
     Ok(Row::new(method, format!("diff_{metric}"), d.mean).with_ci95(lo, hi))
 }
 
-/// Computes rows, claims, figures, CSV files and the report.
+/// Computes the rows, the claims and the per-run CSV file.
 pub(super) fn analyse(
     prep: &Prepared,
     kept: &[Vec<KeptRun>],
@@ -47,7 +46,7 @@ pub(super) fn analyse(
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let c: &Checked = &prep.checked;
-    let (Some(main), Some(main_fold)) = (kept.first(), folds.first()) else {
+    let (Some(main), Some(_)) = (kept.first(), folds.first()) else {
         return Err(SimError::invalid_argument("urban", "no main batch"));
     };
     for (s, spec) in c.scenes.iter().enumerate() {
@@ -114,10 +113,7 @@ pub(super) fn analyse(
             out.claim(claim);
         }
     }
-    per_run_csv(c, main, out)?;
-    figures::write(prep, main_fold, out)?;
-    report::write(prep, main, out);
-    Ok(())
+    per_run_csv(c, main, out)
 }
 
 /// `per_run.csv`: every run's statistics per scenario and method.

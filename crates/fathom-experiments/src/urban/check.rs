@@ -17,7 +17,9 @@ use fathom_sensors::map_range::{DetectionParams, LidarParams, RangeSensor, Range
 use fathom_traj::quadrotor::{FlightParams, Quadrotor, QuadrotorParams, WindParams};
 use nalgebra::Vector3;
 
-use super::nav::Method;
+use super::check_scene::model_err;
+pub use super::check_scene::{SceneSpec, WorldSource};
+use super::method::Method;
 use super::scenario::{
     AblationTargetToml, BaroInverse, DetectionToml, LidarToml, PresetWorld, RangefindersToml,
     Ranging, UrbanScenario,
@@ -82,39 +84,6 @@ pub struct FilterSetup {
     pub grid_rate_hz: f64,
     /// With the lidar, the grid filters use every `k`-th beam.
     pub lidar_beam_stride: usize,
-}
-
-/// Where a scenario's world comes from.
-#[derive(Debug, Clone, PartialEq)]
-pub enum WorldSource {
-    /// The bridge preset.
-    Bridge(Bridge),
-    /// The buildings preset.
-    Buildings(Buildings),
-    /// A user's OBJ or STL file.
-    File {
-        /// The path as written in the scenario.
-        path: String,
-        /// How to read it into NED metres.
-        settings: ImportSettings,
-    },
-}
-
-/// One checked `[[scenarios]]` entry.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SceneSpec {
-    /// Name.
-    pub name: String,
-    /// The range sensor.
-    pub ranging: Ranging,
-    /// The world.
-    pub world: WorldSource,
-    /// Waypoints in the world's frame (`None`: the preset's path).
-    pub waypoints: Option<Vec<[f64; 3]>>,
-    /// Start height above ground of a preset path, m.
-    pub start_height: f64,
-    /// The paper's scenario this one is (name and preset world match).
-    pub paper: Option<PresetWorld>,
 }
 
 /// What an ablation changes.
@@ -230,10 +199,6 @@ impl Checked {
     pub fn index_of(&self, m: Method) -> Option<usize> {
         self.methods.iter().position(|x| *x == m)
     }
-}
-
-pub(super) fn model_err(file: &str, key: &str, e: impl std::fmt::Display) -> SimError {
-    SimError::invalid(file, key, e.to_string())
 }
 
 /// Events every `rate` Hz on the IMU clock: the whole number of IMU steps.

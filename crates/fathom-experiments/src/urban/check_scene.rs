@@ -1,13 +1,11 @@
 //! The `[[scenarios]]` entries of an `urban` scenario checked: name, ranging, the
 //! preset world's dimensions or the user's mesh file settings, and the waypoints.
 
-use super::check::SceneSpec;
-use super::check::WorldSource;
-use super::check::model_err;
 use super::scenario::AxesToml;
 use super::scenario::BridgeToml;
 use super::scenario::BuildingsToml;
 use super::scenario::PresetWorld;
+use super::scenario::Ranging;
 use super::scenario::SceneToml;
 use crate::common::check_case_name;
 use fathom_map::AxisConvention;
@@ -18,6 +16,43 @@ use fathom_map::presets::Buildings;
 use fathom_map::presets::BuildingsParams;
 use fathom_sim::SimError;
 use fathom_sim::scenario::require_positive;
+
+/// Where a scenario's world comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum WorldSource {
+    /// The bridge preset.
+    Bridge(Bridge),
+    /// The buildings preset.
+    Buildings(Buildings),
+    /// A user's OBJ or STL file.
+    File {
+        /// The path as written in the scenario.
+        path: String,
+        /// How to read it into NED metres.
+        settings: ImportSettings,
+    },
+}
+
+/// One checked `[[scenarios]]` entry.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneSpec {
+    /// Name.
+    pub name: String,
+    /// The range sensor.
+    pub ranging: Ranging,
+    /// The world.
+    pub world: WorldSource,
+    /// Waypoints in the world's frame (`None`: the preset's path).
+    pub waypoints: Option<Vec<[f64; 3]>>,
+    /// Start height above ground of a preset path, m.
+    pub start_height: f64,
+    /// The paper's scenario this one is (name and preset world match).
+    pub paper: Option<PresetWorld>,
+}
+
+pub(super) fn model_err(file: &str, key: &str, e: impl std::fmt::Display) -> SimError {
+    SimError::invalid(file, key, e.to_string())
+}
 
 fn bridge(file: &str, key: &str, b: &BridgeToml) -> Result<Bridge, SimError> {
     BridgeParams {

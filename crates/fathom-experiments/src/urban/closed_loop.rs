@@ -15,7 +15,7 @@ use fathom_traj::quadrotor::Flight;
 use super::check::Ablation;
 use super::nav::NavEnv;
 use super::record::MethodRecord;
-use super::run::{Runner, method_record, range_every};
+use super::runner::{Runner, method_record, range_every, sensor_of};
 use super::sense::{Sensing, Streams};
 use super::world::Prepared;
 use fathom_sim::SimError;
@@ -44,10 +44,7 @@ pub(super) fn fly_on_estimate(
     let c = &prep.checked;
     let spec = &c.scenes[ablation.scene];
     let scene = &prep.scenes[ablation.scene];
-    let sensor = match spec.ranging {
-        super::scenario::Ranging::Lidar => &c.lidar,
-        super::scenario::Ranging::Rangefinders => &c.rangefinders,
-    };
+    let sensor = sensor_of(prep, spec.ranging);
     let mut wind = streams.wind.clone();
     let mut flight = Flight::new(&c.quad, &scene.path, &mut wind);
     let mut sensing = Sensing::new(

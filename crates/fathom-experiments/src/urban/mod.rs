@@ -30,11 +30,13 @@ pub mod claims;
 pub mod closed_loop;
 mod cost;
 mod figures;
+pub mod method;
 pub mod nav;
 mod paper;
 pub mod record;
 mod report;
 pub mod run;
+mod runner;
 pub mod scenario;
 pub mod sense;
 mod settings;
@@ -136,7 +138,14 @@ impl Experiment for Urban {
         folds: Vec<BatchFold>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
-        analysis::analyse(prep, &kept, &folds, out)
+        // One direction: analysis (rows, claims, per-run CSV), then figures, then report.
+        analysis::analyse(prep, &kept, &folds, out)?;
+        let (Some(main), Some(main_fold)) = (kept.first(), folds.first()) else {
+            return Err(SimError::invalid_argument("urban", "no main batch"));
+        };
+        figures::write(prep, main_fold, out)?;
+        report::write(prep, main, out);
+        Ok(())
     }
 }
 

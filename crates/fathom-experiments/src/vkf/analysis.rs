@@ -6,7 +6,6 @@ use fathom_stats::{Quartiles, mean_and_ci95, median_ci, paired_mean_ci, rms};
 
 use super::Prepared;
 use super::sim::{GATED, INS_DVL, METHODS, PINS, RunOutput, VKF};
-use super::{figures, report};
 use fathom_report::output::{Claim, Row, fixed as f};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
@@ -136,13 +135,13 @@ pub(super) const METHOD_UNITS: [(&str, &str); 5] = [
     ("runs_final_h_beyond_threshold", "count"),
 ];
 
-/// Computes the rows, the claims, the figures and the report.
+/// Computes the rows and the claims, and returns the tables the report is written from.
 pub(super) fn analyse(
     p: &Prepared,
     runs: &[RunOutput],
     literal: &[RunOutput],
     out: &mut Analysis,
-) -> Result<(), SimError> {
+) -> Result<Tables, SimError> {
     let (c, shared) = (&p.c, &p.shared);
     for (metric, unit) in METHOD_UNITS.into_iter().chain([
         ("growth_rate_invalid", "m/s"),
@@ -389,24 +388,14 @@ pub(super) fn analyse(
         final_h: Quartiles::of(&all[GATED].final_h)?,
         final_h_mean: mean(&all[GATED].final_h),
     };
-    figures::write(c, shared, runs, out)?;
-    report::write(
-        p,
-        &Tables {
-            table,
-            sfb_table,
-            literal_table,
-            lit_finals,
-            lit_b_rms,
-            default_b_rms: first_interval_bias_rms(runs),
-            literal_runs: literal.len(),
-            gated,
-        },
-        out,
-    );
-    if c.smooth {
-        let md = super::smoothed::section(p, runs, out)?;
-        out.report(&md);
-    }
-    Ok(())
+    Ok(Tables {
+        table,
+        sfb_table,
+        literal_table,
+        lit_finals,
+        lit_b_rms,
+        default_b_rms: first_interval_bias_rms(runs),
+        literal_runs: literal.len(),
+        gated,
+    })
 }

@@ -121,7 +121,15 @@ impl Experiment for Vkf {
         };
         let runs = records.swap_remove(0);
         if p.c.all_methods() {
-            analysis::analyse(p, &runs, &literal, out)
+            // One direction: analysis (rows, claims), then figures, then report.
+            let tables = analysis::analyse(p, &runs, &literal, out)?;
+            figures::write(&p.c, &p.shared, &runs, out)?;
+            report::write(p, &tables, out);
+            if p.c.smooth {
+                let md = smoothed::section(p, &runs, out)?;
+                out.report(&md);
+            }
+            Ok(())
         } else {
             subset::analyse(p, &runs, out)
         }

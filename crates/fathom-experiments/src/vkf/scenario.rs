@@ -17,10 +17,22 @@ use fathom_traj::SeabedProfile;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use super::sim::METHODS;
 use fathom_sim::SimError;
 use fathom_sim::method_list::select;
 use fathom_sim::scenario::{require_in_range, require_non_negative, require_positive};
+
+/// The compared methods, in output order.
+pub const METHODS: [&str; 5] = ["PINS", "INS-DVL", "VKF", "INS-DVL-gated", "ESKF"];
+/// Index of each method in [`METHODS`].
+pub const PINS: usize = 0;
+/// Index of `INS-DVL`.
+pub const INS_DVL: usize = 1;
+/// Index of `VKF`.
+pub const VKF: usize = 2;
+/// Index of `INS-DVL-gated`.
+pub const GATED: usize = 3;
+/// Index of `ESKF`.
+pub const ESKF: usize = 4;
 
 /// Velocity-filter-aided INS.
 ///

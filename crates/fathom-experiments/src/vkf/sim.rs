@@ -18,18 +18,7 @@ use rand_chacha::ChaCha8Rng;
 use super::scenario::Checked;
 use fathom_sim::SimError;
 
-/// The compared methods, in output order.
-pub const METHODS: [&str; 5] = ["PINS", "INS-DVL", "VKF", "INS-DVL-gated", "ESKF"];
-/// Index of each method in [`METHODS`].
-pub const PINS: usize = 0;
-/// Index of `INS-DVL`.
-pub const INS_DVL: usize = 1;
-/// Index of `VKF`.
-pub const VKF: usize = 2;
-/// Index of `INS-DVL-gated`.
-pub const GATED: usize = 3;
-/// Index of `ESKF`.
-pub const ESKF: usize = 4;
+pub use super::scenario::{ESKF, GATED, INS_DVL, METHODS, PINS, VKF};
 
 /// Everything that does not depend on the run: truth at the IMU rate, the error-free
 /// IMU increments, the "flat" true position (true NED velocity integrated like the

@@ -3,12 +3,16 @@
 //! - Every internal dependency edge of a workspace package (normal, build and dev
 //!   dependencies, from `cargo metadata`) is listed in ARCHITECTURE.md's section
 //!   "Allowed internal dependencies", and every listed edge exists.
-//! - No library crate other than `fathom-sim` opens files, reads environment
-//!   variables or prints, outside its test modules (with the exceptions listed in
+//! - No library crate below the I/O layer ([`IO_CRATES`]) opens files, reads
+//!   environment variables or prints, outside its test modules (with the exceptions listed in
 //!   [`IO_EXCEPTIONS`], each documented in ARCHITECTURE.md).
+//! - The layout checks of [`layout`]: module trees, import circles, sizes, the
+//!   codemap, quiet test skips.
 //!
 //! Each check is a plain function of its inputs, so the tests also run it on a
 //! deliberately broken input (negative controls).
+
+mod layout;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
