@@ -9,8 +9,6 @@ use fathom_estimators::map_aided::{
     MgpmfSettings, ParticleParams, ParticleSettings, RangeParams, RangeSettings, SwitchParams,
     SwitchSettings,
 };
-use fathom_map::ImportSettings;
-use fathom_map::presets::{Bridge, Buildings};
 use fathom_sensors::allan_imu::{AllanImu, AllanImuParams};
 use fathom_sensors::barometer::LinearBaroCalibration;
 use fathom_sensors::map_range::{DetectionParams, LidarParams, RangeSensor, RangeSensorParams};
@@ -21,8 +19,8 @@ use super::check_scene::model_err;
 pub use super::check_scene::{SceneSpec, WorldSource};
 use super::method::Method;
 use super::scenario::{
-    AblationTargetToml, BaroInverse, DetectionToml, LidarToml, PresetWorld, RangefindersToml,
-    Ranging, UrbanScenario,
+    AblationTargetToml, BaroInverse, DetectionToml, LidarToml, RangefindersToml, Ranging,
+    UrbanScenario,
 };
 use fathom_sim::SimError;
 use fathom_sim::method_list::select;

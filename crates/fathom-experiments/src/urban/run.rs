@@ -7,24 +7,20 @@
 //! batch (paired ablations). The initial error is drawn from `P0` once per run and
 //! shared by the methods and scenarios.
 
-use fathom_estimators::map_aided::{ErrorVector12, NavMode};
+use fathom_estimators::map_aided::ErrorVector12;
 use fathom_ins::local_level::LocalTruthSample;
 use fathom_traj::Trajectory;
 use fathom_traj::quadrotor::fly_on_truth;
-use nalgebra::Vector3;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, StandardNormal};
 
 use super::check::{Ablation, AblationKind, FilterSetup};
 use super::closed_loop;
-use super::nav::{Method, Nav, NavCounts, NavEnv, los_satellites};
-use super::record::{
-    GridSnapshot, MethodRecord, RunRecord, ScanSnapshot, SceneDetail, SceneRecord,
-};
+use super::nav::{Method, NavEnv};
+use super::record::{RunRecord, ScanSnapshot, SceneDetail, SceneRecord};
 use super::runner::{Runner, method_record, range_every, sensor_of};
 use super::scenario::Ranging;
 use super::sense::{Sensing, SensorEpoch, Streams};
-use super::trace::Trace;
 use super::world::{Prepared, PreparedScene};
 use fathom_sim::SimError;
 
