@@ -5,9 +5,9 @@ use std::path::PathBuf;
 use anyhow::{Context, anyhow};
 use clap::{Args, Subcommand};
 use fathom_experiments::registry;
-use fathom_sim::driver::campaign::{merge, run_shard, slurm_script};
+use fathom_sim::driver::campaign::{merge, run_assessed_shard, slurm_script};
 use fathom_sim::experiment::{Environment, Job, Shard};
-use fathom_sim::user_run::{check_command, peek_experiment};
+use fathom_sim::user_run::{assess_scenario, check_command};
 
 use crate::{Failure, RunArgs, failure, progress_bar, run_hook};
 
@@ -55,22 +55,14 @@ pub(crate) fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Fail
     let text = std::fs::read_to_string(&args.scenario)
         .with_context(|| format!("cannot read `{label}`"))
         .map_err(Failure::Usage)?;
-    let exp = peek_experiment(&text, &label, &registry).map_err(failure)?;
-    let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("fathom-out").join(format!(
-            "{}-shard-{}-of-{}",
-            exp.name(),
-            shard.index,
-            shard.count
-        ))
-    });
+    let bar = progress_bar();
     let job = Job {
         text: &text,
         file: &label,
         runs: args.runs,
         seed: args.seed,
         threads: args.threads,
-        progress: None,
+        progress: Some(run_hook(bar.clone())),
         env: Environment {
             limits: args.limits.limits()?,
             ..Environment::new(
@@ -80,12 +72,16 @@ pub(crate) fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Fail
             )
         },
     };
-    let bar = progress_bar();
-    let job = Job {
-        progress: Some(run_hook(bar.clone())),
-        ..job
-    };
-    let outcome = run_shard(exp, &job, shard, &out, args.force);
+    let (exp, assessed) = assess_scenario(&job, &registry).map_err(failure)?;
+    let out = args.out.clone().unwrap_or_else(|| {
+        PathBuf::from("fathom-out").join(format!(
+            "{}-shard-{}-of-{}",
+            exp.name(),
+            shard.index,
+            shard.count
+        ))
+    });
+    let outcome = run_assessed_shard(exp, assessed, &job, shard, &out, args.force);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }

@@ -85,10 +85,10 @@ use fathom_experiments::registry;
 use fathom_replay::plaza::parse_settings;
 use fathom_sim::cost::Limits;
 use fathom_sim::driver::{console_claims, console_rows, console_setup};
-use fathom_sim::experiment::{Environment, Job, Shard};
+use fathom_sim::experiment::Shard;
 use fathom_sim::progress::{Progress, ProgressEvent};
 use fathom_sim::user_run::{
-    RunOptions, check_command_with, check_scenario_with, one_line, peek_experiment,
+    RunOptions, assess_scenario, check_line, check_scenario_with, job_of, one_line, run_assessed,
     run_scenario_text,
 };
 use fathom_sim::{Experiment, SimError, error_chain};
@@ -396,23 +396,12 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         force: args.force,
         limits,
     };
-    // Checked (scenario, overrides, cost against the limits) before anything runs;
-    // the estimate is printed first.
-    let exp = peek_experiment(&text, &label, &registry).map_err(failure)?;
-    let job = Job {
-        text: &text,
-        file: &label,
-        runs: args.runs,
-        seed: args.seed,
-        threads: args.threads,
-        progress: None,
-        env: Environment {
-            limits,
-            ..Environment::new(options.base_dir.clone())
-        },
-    };
-    let (resolved, cost) = exp.assess(&job).map_err(failure)?;
-    let what = match (resolved.runs, resolved.base_seed) {
+    // Assessed once (scenario, overrides, cost against the limits) before anything
+    // runs; the estimate is printed first. The bar stays hidden until a batch starts.
+    let bar = progress_bar();
+    let job = job_of(&text, &label, &options, Some(run_hook(bar.clone())));
+    let (exp, assessed) = assess_scenario(&job, &registry).map_err(failure)?;
+    let what = match (assessed.resolved.runs, assessed.resolved.base_seed) {
         (Some(n), Some(seed)) => format!("{n} runs, base seed {seed}"),
         _ => "one deterministic replay".to_string(),
     };
@@ -420,16 +409,9 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         "{} ({}): {what}; estimate: {}\n",
         exp.name(),
         exp.seed_doc(),
-        cost.summary()
+        assessed.cost.summary()
     ));
-    let bar = progress_bar();
-    let outcome = run_scenario_text(
-        &text,
-        &label,
-        &options,
-        &registry,
-        Some(run_hook(bar.clone())),
-    );
+    let outcome = run_assessed(exp, assessed, &job, &options);
     if let Some(bar) = &bar {
         bar.finish_and_clear();
     }
@@ -538,14 +520,12 @@ fn progress_hook(bar: &ProgressBar, draw: bool) -> Progress {
 fn check_cmd(args: &CheckArgs) -> Result<String, Failure> {
     let registry = registry();
     let limits = args.limits.limits()?;
-    let (code, line) = check_command_with(&args.scenario, &registry, &limits);
-    if code != 0 {
-        return Err(Failure::Usage(anyhow!(line)));
-    }
+    let resolved = check_scenario_with(&args.scenario, &registry, &limits)
+        .map_err(|e| Failure::Usage(anyhow!(one_line(&error_chain(&e)))))?;
+    let line = check_line(&args.scenario, &resolved);
     if args.quiet {
         return Ok(format!("{line}\n"));
     }
-    let resolved = check_scenario_with(&args.scenario, &registry, &limits).map_err(failure)?;
     Ok(format!(
         "# {line}\n# resolved scenario (defaults filled in):\n{}",
         resolved.resolved_toml

@@ -135,3 +135,45 @@ fn experiment_key_errors() {
     let e = check_scenario_text("experiment = 3\n", "a.toml", &reg).unwrap_err();
     assert!(e.to_string().contains("must be a string"), "{e}");
 }
+
+#[test]
+fn an_assessed_table_is_the_resolved_text_parsed_back() {
+    // The setup comparison and `fathom check`'s counts read the typed scenario as a table
+    // instead of parsing the resolved text again: the two must be the same table, for
+    // every preset and every scenario file of the repository.
+    let reg = registry();
+    let mut files: Vec<PathBuf> = std::fs::read_dir(root().join("scenarios"))
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.extension().is_some_and(|x| x == "toml"))
+        .collect();
+    files.sort();
+    let mut compared = 0;
+    for path in files {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let label = path.display().to_string();
+        let job = fathom_sim::experiment::Job {
+            text: &text,
+            file: &label,
+            runs: Some(3),
+            seed: None,
+            threads: None,
+            progress: None,
+            env: fathom_sim::experiment::Environment::new(root()),
+        };
+        // Replay settings files are not scenarios of a registered experiment.
+        let Ok((exp, a)) = fathom_sim::user_run::assess_scenario(&job, &reg) else {
+            continue;
+        };
+        let parsed: toml::Table = a.resolved.toml.parse().unwrap();
+        assert_eq!(a.table, parsed, "{label}");
+        assert_eq!(
+            Setup::of_table(exp, &a.table),
+            Setup::of(exp, &a.resolved.toml),
+            "{label}"
+        );
+        compared += 1;
+    }
+    assert!(compared >= reg.len(), "{compared} scenario files compared");
+}

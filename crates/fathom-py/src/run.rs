@@ -15,9 +15,9 @@ use fathom_experiments::registry;
 use fathom_report::output::Summary;
 use fathom_sim::experiment::{Environment, Executed, Job};
 use fathom_sim::user_run::{
-    RunOptions, check_command, check_scenario_text, one_line, peek_experiment, run_scenario_text,
+    RunOptions, assess_scenario, check_command, check_scenario_text, one_line, run_scenario_text,
 };
-use fathom_sim::{DynExperiment, SimError, error_chain};
+use fathom_sim::{SimError, error_chain};
 use pyo3::exceptions::{PyFileNotFoundError, PyOSError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
@@ -242,30 +242,11 @@ fn build_result(
     })
 }
 
-/// The checks `fathom run` makes on its options before anything runs.
+/// The checks `fathom run` makes on its options before anything runs (the runner's
+/// one rule, [`fathom_sim::experiment::check_overrides`]).
 fn check_options(runs: Option<usize>, seed: Option<u64>, threads: Option<usize>) -> PyResult<()> {
-    let bad = |what: &str, reason: String| {
-        Err(PyValueError::new_err(message(&SimError::invalid_argument(
-            what, reason,
-        ))))
-    };
-    if runs == Some(0) {
-        return bad("--runs", "must be at least 1".into());
-    }
-    if threads == Some(0) {
-        return bad("--threads", "must be at least 1".into());
-    }
-    if seed.is_some_and(|s| i64::try_from(s).is_err()) {
-        return bad(
-            "--seed",
-            format!(
-                "must be at most {} (the largest TOML integer, so that the resolved scenario \
-                 can record it)",
-                i64::MAX
-            ),
-        );
-    }
-    Ok(())
+    fathom_sim::experiment::check_overrides(runs, seed, threads)
+        .map_err(|e| PyValueError::new_err(message(&e)))
 }
 
 /// Run a scenario (a path or TOML text) like `fathom run` and return its results.
@@ -296,10 +277,7 @@ pub fn run(
         None => {
             let executed: Executed = py
                 .detach(|| {
-                    let reg = registry();
-                    let exp: &dyn DynExperiment =
-                        peek_experiment(&scenario.text, &scenario.label, &reg)?;
-                    exp.execute(&Job {
+                    let job = Job {
                         text: &scenario.text,
                         file: &scenario.label,
                         runs,
@@ -307,7 +285,8 @@ pub fn run(
                         threads,
                         progress: None,
                         env: Environment::new(base_dir),
-                    })
+                    };
+                    assess_scenario(&job, &registry())?.1.execute()
                 })
                 .map_err(|e| to_py_err(&e))?;
             let files: Vec<(String, String)> = executed

@@ -33,7 +33,85 @@ pub fn load_toml<T: DeserializeOwned>(path: impl AsRef<Path>) -> Result<T, SimEr
 /// [`SimError::Toml`] with the key path (when it can be determined) and the 1-based
 /// line and column of the offending text.
 pub fn parse_toml<T: DeserializeOwned>(text: &str, file_label: &str) -> Result<T, SimError> {
-    toml::from_str::<T>(text).map_err(|e| toml_error(&e, text, file_label))
+    ScenarioDoc::parse(text, file_label)?.into_typed()
+}
+
+/// A scenario text parsed once: its TOML syntax tree, with the position of every key
+/// and value, from which the experiment is picked ([`ScenarioDoc::peek`]), the magnitudes
+/// are checked ([`ScenarioDoc::table`]) and the typed scenario is read
+/// ([`ScenarioDoc::into_typed`]), each error naming the line of the user's text.
+#[derive(Clone)]
+pub struct ScenarioDoc<'a> {
+    text: &'a str,
+    file: &'a str,
+    root: toml::Spanned<toml::de::DeTable<'a>>,
+}
+
+impl std::fmt::Debug for ScenarioDoc<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ScenarioDoc")
+            .field("file", &self.file)
+            .field("bytes", &self.text.len())
+            .finish()
+    }
+}
+
+impl<'a> ScenarioDoc<'a> {
+    /// Parses `text` (the one TOML parse of a scenario); `file` labels errors.
+    ///
+    /// # Errors
+    /// [`SimError::Toml`] for a syntax error, with its line and column.
+    pub fn parse(text: &'a str, file: &'a str) -> Result<Self, SimError> {
+        #[cfg(test)]
+        PARSES.with(|p| p.borrow_mut().push(file.to_string()));
+        let root = toml::de::DeTable::parse(text).map_err(|e| toml_error(&e, text, file))?;
+        Ok(ScenarioDoc { text, file, root })
+    }
+
+    /// The text as the user wrote it.
+    pub fn text(&self) -> &'a str {
+        self.text
+    }
+
+    /// The label of the text in error messages.
+    pub fn file(&self) -> &'a str {
+        self.file
+    }
+
+    /// Some keys read leniently from the tree (the tree is kept).
+    ///
+    /// # Errors
+    /// [`SimError::Toml`] when the keys do not match `T`.
+    pub fn peek<T: DeserializeOwned>(&self) -> Result<T, SimError> {
+        self.clone().into_typed()
+    }
+
+    /// The document as an untyped table (the magnitude checks walk it).
+    ///
+    /// # Errors
+    /// [`SimError::Toml`] (not expected: the tree is valid TOML).
+    pub fn table(&self) -> Result<toml::Table, SimError> {
+        self.peek()
+    }
+
+    /// The typed scenario, read from the tree.
+    ///
+    /// # Errors
+    /// [`SimError::Toml`] with the key path and the line and column of the offending text
+    /// (an unknown key, a wrong type, a missing field).
+    pub fn into_typed<T: DeserializeOwned>(self) -> Result<T, SimError> {
+        let (text, file) = (self.text, self.file);
+        T::deserialize(toml::de::Deserializer::from(self.root))
+            .map_err(|e| toml_error(&e, text, file))
+    }
+}
+
+#[cfg(test)]
+thread_local! {
+    /// The labels of the texts [`ScenarioDoc::parse`] parsed on this thread (tests count
+    /// them: a scenario is parsed once per run).
+    pub(crate) static PARSES: std::cell::RefCell<Vec<String>> =
+        const { std::cell::RefCell::new(Vec::new()) };
 }
 
 /// Convert a `toml` deserialization error into a [`SimError::Toml`].
@@ -258,14 +336,12 @@ pub const MAX_PSD: f64 = 1e12;
 /// Values beyond them would make the geometry or the noise meaningless (a beacon at
 /// 10³⁰⁸ m gives non-finite ranges), so they are refused when the file is checked.
 ///
+/// `table` is the scenario as the user wrote it ([`ScenarioDoc::table`]).
+///
 /// # Errors
 /// [`SimError::Invalid`] naming the key (with its array index) and the value.
-pub fn check_magnitudes(text: &str, file: &str) -> Result<(), SimError> {
-    let Ok(table) = toml::from_str::<toml::Table>(text) else {
-        // The typed parse reports syntax errors with their key and line.
-        return Ok(());
-    };
-    walk_table(&table, "", file)
+pub fn check_magnitudes(table: &toml::Table, file: &str) -> Result<(), SimError> {
+    walk_table(table, "", file)
 }
 
 fn walk_table(table: &toml::Table, prefix: &str, file: &str) -> Result<(), SimError> {
@@ -351,26 +427,6 @@ pub fn require_experiment(file: &str, value: &str, expected: &str) -> Result<(),
 pub fn to_toml<T: serde::Serialize>(value: &T, file: &str) -> Result<String, SimError> {
     toml::to_string(value)
         .map_err(|e| SimError::invalid_argument(format!("scenario `{file}`"), e.to_string()))
-}
-
-/// Parses a scenario text, validates it with `check` and returns it re-serialized
-/// as TOML with every default filled in: what `fathom check` prints. Every
-/// experiment's `check_scenario_text` is this with its own schema and check.
-///
-/// # Errors
-/// [`SimError::Toml`] from parsing, whatever `check` returns, or the error of
-/// [`to_toml`].
-pub fn resolve_scenario_text<T, C>(
-    text: &str,
-    file: &str,
-    check: impl FnOnce(&T, &str) -> Result<C, SimError>,
-) -> Result<String, SimError>
-where
-    T: DeserializeOwned + serde::Serialize,
-{
-    let scenario: T = parse_toml(text, file)?;
-    check(&scenario, file)?;
-    to_toml(&scenario, file)
 }
 
 #[cfg(test)]
@@ -510,6 +566,10 @@ mod tests {
 
     #[test]
     fn magnitudes_beyond_any_sensor_or_place_are_refused_with_their_key() {
+        let check_magnitudes = |text: &str, file: &str| {
+            let table = ScenarioDoc::parse(text, file).unwrap().table().unwrap();
+            check_magnitudes(&table, file)
+        };
         let ok = "[a]\nx_m = 1e6\nsigma_m = 3.0\npositions = [[1.0, 2.0, 3.0]]\nn = 1e300\n";
         assert!(check_magnitudes(ok, "f").is_ok());
         for (text, key) in [

@@ -4,19 +4,24 @@
 //! A scenario file names its experiment with a top-level key `experiment = "<name>"`.
 //! The key is a field of every experiment's scenario struct (validated against the
 //! experiment's name) rather than being stripped by the driver: the experiment then
-//! parses the user's text unchanged, so line and column numbers in error messages stay
-//! those of the user's file. The driver only peeks at the key first
-//! ([`peek_experiment`]) to choose the experiment.
+//! reads the user's text unchanged, so line and column numbers in error messages stay
+//! those of the user's file.
+//!
+//! Every front end goes the same way ([`assess_scenario`]): the flags into a [`Job`], the
+//! text parsed once ([`ScenarioDoc`]), the experiment picked from its `experiment` key
+//! ([`pick_experiment`]), then the experiment's assessment (overrides, check, cost); the
+//! run executes that [`Assessed`] value ([`run_assessed`]).
 
 use std::path::{Path, PathBuf};
 
 use serde::Deserialize;
 
 use crate::cost::{Cost, Limits};
-use crate::driver::{ExperimentResult, WriteOptions, error_chain, execute_to};
+use crate::driver::{ExperimentResult, WriteOptions, error_chain, execute_assessed_to};
 use crate::error::SimError;
-use crate::experiment::{DynExperiment, Environment, Job};
+use crate::experiment::{Assessed, DynExperiment, Environment, Job};
 use crate::progress::Progress;
+use crate::scenario::ScenarioDoc;
 
 pub use crate::driver::{RUN_INFO_FILE, RunInfo};
 
@@ -32,12 +37,25 @@ struct Peek {
 /// [`SimError::Toml`] for a TOML syntax error; [`SimError::Invalid`] (key
 /// `experiment`) when the key is missing, not a string, or names no registered
 /// experiment.
-pub fn peek_experiment<'r>(
+pub fn peek_experiment(
     text: &str,
     file: &str,
-    registry: &'r [&'static dyn DynExperiment],
-) -> Result<&'r dyn DynExperiment, SimError> {
-    let peek: Peek = crate::scenario::parse_toml(text, file)?;
+    registry: &[&'static dyn DynExperiment],
+) -> Result<&'static dyn DynExperiment, SimError> {
+    pick_experiment(&ScenarioDoc::parse(text, file)?, registry)
+}
+
+/// The experiment named by the parsed scenario `doc`.
+///
+/// # Errors
+/// [`SimError::Invalid`] (key `experiment`) when the key is missing, not a string, or
+/// names no registered experiment.
+pub fn pick_experiment(
+    doc: &ScenarioDoc<'_>,
+    registry: &[&'static dyn DynExperiment],
+) -> Result<&'static dyn DynExperiment, SimError> {
+    let file = doc.file();
+    let peek: Peek = doc.peek()?;
     let known = registry
         .iter()
         .map(|e| format!("\"{}\"", e.name()))
@@ -114,20 +132,43 @@ pub fn check_scenario_text_with(
     registry: &[&'static dyn DynExperiment],
     limits: &Limits,
 ) -> Result<CheckedScenario, SimError> {
-    let exp = peek_experiment(text, file, registry)?;
-    let resolved_toml = exp.resolve(text, file, None, None)?.toml;
-    let cost = exp.cost(text, file, None, None, None)?;
-    cost.check(limits, file)?;
-    let value: toml::Table = toml::from_str(&resolved_toml)
-        .map_err(|e| SimError::invalid_argument(format!("resolved `{file}`"), e.to_string()))?;
-    let (keys, tables) = count_keys(&toml::Value::Table(value));
+    let job = Job {
+        text,
+        file,
+        runs: None,
+        seed: None,
+        threads: None,
+        progress: None,
+        env: Environment {
+            limits: *limits,
+            ..Environment::new(".")
+        },
+    };
+    let (exp, assessed) = assess_scenario(&job, registry)?;
+    let (keys, tables) = count_keys(&toml::Value::Table(assessed.table));
     Ok(CheckedScenario {
         experiment: exp.name().to_string(),
-        resolved_toml,
+        resolved_toml: assessed.resolved.toml,
         keys,
         tables,
-        cost,
+        cost: assessed.cost,
     })
+}
+
+/// Assesses a user's scenario once: the text of `job` parsed, its experiment picked
+/// from `registry`, the overrides applied, checked and costed against the job's limits.
+///
+/// # Errors
+/// A TOML error, the `experiment` key's errors ([`pick_experiment`]), then
+/// [`DynExperiment::assess`]'s.
+pub fn assess_scenario<'j>(
+    job: &'j Job<'j>,
+    registry: &[&'static dyn DynExperiment],
+) -> Result<(&'static dyn DynExperiment, Assessed<'j>), SimError> {
+    let doc = ScenarioDoc::parse(job.text, job.file)?;
+    let exp = pick_experiment(&doc, registry)?;
+    let assessed = exp.assess_doc(doc, job)?;
+    Ok((exp, assessed))
 }
 
 /// [`check_scenario_text`] on a file (its path as given labels errors).
@@ -171,19 +212,22 @@ pub fn check_command_with(
     limits: &Limits,
 ) -> (u8, String) {
     match check_scenario_with(path, registry, limits) {
-        Ok(c) => (
-            0,
-            format!(
-                "OK {}: experiment `{}`, {} keys in {} tables; {}",
-                path.display(),
-                c.experiment,
-                c.keys,
-                c.tables,
-                c.cost.summary()
-            ),
-        ),
+        Ok(c) => (0, check_line(path, &c)),
         Err(e) => (EXIT_USAGE, one_line(&error_chain(&e))),
     }
+}
+
+/// The line `fathom check` prints for a valid scenario: its experiment, its size and
+/// the cost estimate.
+pub fn check_line(path: &Path, c: &CheckedScenario) -> String {
+    format!(
+        "OK {}: experiment `{}`, {} keys in {} tables; {}",
+        path.display(),
+        c.experiment,
+        c.keys,
+        c.tables,
+        c.cost.summary()
+    )
 }
 
 /// `text` on one line (line breaks replaced by spaces).
@@ -279,31 +323,20 @@ pub fn run_scenario_text(
     registry: &[&'static dyn DynExperiment],
     progress: Option<Progress>,
 ) -> Result<(ExperimentResult, RunInfo), SimError> {
-    if options.seed.is_some_and(|s| i64::try_from(s).is_err()) {
-        return Err(SimError::invalid_argument(
-            "--seed",
-            format!(
-                "must be at most {} (2^63 - 1, the largest TOML integer, so that the resolved \
-                 scenario can record it)",
-                i64::MAX
-            ),
-        ));
-    }
-    if options.runs == Some(0) {
-        return Err(SimError::invalid_argument("--runs", "must be at least 1"));
-    }
-    if options.threads == Some(0) {
-        return Err(SimError::invalid_argument(
-            "--threads",
-            "must be at least 1",
-        ));
-    }
-    let exp = peek_experiment(text, label, registry)?;
-    let out_dir = options
-        .out_dir
-        .clone()
-        .unwrap_or_else(|| Path::new("fathom-out").join(exp.name()));
-    let job = Job {
+    let job = job_of(text, label, options, progress);
+    let (exp, assessed) = assess_scenario(&job, registry)?;
+    run_assessed(exp, assessed, &job, options)
+}
+
+/// The job of a user's scenario `text` (labelled `label`) with the options' overrides,
+/// limits and data folder.
+pub fn job_of<'a>(
+    text: &'a str,
+    label: &'a str,
+    options: &RunOptions,
+    progress: Option<Progress>,
+) -> Job<'a> {
+    Job {
         text,
         file: label,
         runs: options.runs,
@@ -314,11 +347,28 @@ pub fn run_scenario_text(
             limits: options.limits,
             ..Environment::new(options.base_dir.clone())
         },
-    };
+    }
+}
+
+/// Runs an assessed scenario of `exp` and writes its outputs into `options.out_dir`
+/// (default `fathom-out/<experiment>`) as [`run_scenario`] does.
+///
+/// # Errors
+/// As [`run_scenario`] after the check.
+pub fn run_assessed(
+    exp: &dyn DynExperiment,
+    assessed: Assessed<'_>,
+    job: &Job<'_>,
+    options: &RunOptions,
+) -> Result<(ExperimentResult, RunInfo), SimError> {
+    let out_dir = options
+        .out_dir
+        .clone()
+        .unwrap_or_else(|| Path::new("fathom-out").join(exp.name()));
     let write = WriteOptions {
         force: options.force,
         command: "run".into(),
         scenario_files: true,
     };
-    execute_to(exp, &job, &out_dir, &write)
+    execute_assessed_to(exp, assessed, job, &out_dir, &write)
 }

@@ -21,7 +21,9 @@ use sha2::{Digest, Sha256};
 
 use super::{ExperimentResult, OutDir, RunInfo, write_executed};
 use crate::SimError;
-use crate::experiment::{Batch, DynExperiment, FoundRecord, Job, RecordSink, RecordSource, Shard};
+use crate::experiment::{
+    Assessed, Batch, DynExperiment, FoundRecord, Job, RecordSink, RecordSource, Shard,
+};
 
 /// Version of the shard folder layout.
 pub const FORMAT: u32 = 1;
@@ -132,7 +134,8 @@ impl RecordSink for FileSink {
 /// shard's folder is replaced only once the new records are complete).
 ///
 /// # Errors
-/// A refused folder, the experiment's errors, I/O errors.
+/// A bad shard, the scenario's errors, a refused folder, the experiment's errors, I/O
+/// errors.
 pub fn run_shard(
     exp: &dyn DynExperiment,
     job: &Job<'_>,
@@ -140,13 +143,37 @@ pub fn run_shard(
     dir: &Path,
     force: bool,
 ) -> Result<Manifest, SimError> {
+    check_shard(shard)?;
+    run_assessed_shard(exp, exp.assess(job)?, job, shard, dir, force)
+}
+
+/// `K/M` with `0 <= K < M`.
+///
+/// # Errors
+/// [`SimError::InvalidArgument`] naming `--shard`.
+pub fn check_shard(shard: Shard) -> Result<(), SimError> {
     if shard.count == 0 || shard.index >= shard.count {
         return Err(SimError::invalid_argument(
             "--shard",
             format!("K/M needs 0 <= K < M, got {}/{}", shard.index, shard.count),
         ));
     }
-    exp.assess(job)?;
+    Ok(())
+}
+
+/// [`run_shard`] of a job already assessed (the scenario is not parsed again).
+///
+/// # Errors
+/// As [`run_shard`].
+pub fn run_assessed_shard(
+    exp: &dyn DynExperiment,
+    assessed: Assessed<'_>,
+    job: &Job<'_>,
+    shard: Shard,
+    dir: &Path,
+    force: bool,
+) -> Result<Manifest, SimError> {
+    check_shard(shard)?;
     let claim = OutDir::claim(dir, force)?;
     let start = Instant::now();
     let mut sink = FileSink {
@@ -154,7 +181,7 @@ pub fn run_shard(
         current: None,
         batches: Vec::new(),
     };
-    let plan = exp.execute_shard(job, shard, &mut sink)?;
+    let plan = assessed.execute_shard(shard, &mut sink)?;
     sink.flush()?;
     let manifest = Manifest {
         format: FORMAT,
@@ -391,8 +418,9 @@ pub fn merge(
         progress: None,
         env: crate::experiment::Environment::new(base_dir),
     };
-    exp.assess(&job)?;
+    let assessed = exp.assess(&job)?;
     let claim = OutDir::claim(out_dir, force)?;
+    let setup = super::Setup::of_table(exp, &assessed.table);
     let start = Instant::now();
     let mut source = FileSource {
         order,
@@ -400,9 +428,8 @@ pub fn merge(
         part: 0,
         reader: None,
     };
-    let executed = exp.execute_from(&job, &mut source)?;
+    let executed = assessed.execute_from(&mut source)?;
     let elapsed = start.elapsed();
-    let setup = super::Setup::of(exp, &executed.resolved.toml);
     let mut result = write_executed(
         &executed,
         &first.scenario_label,

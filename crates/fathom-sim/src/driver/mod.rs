@@ -3,11 +3,11 @@
 //! and `fathom replay` ([`crate::user_run`]) do per experiment, and `fathom merge`
 //! ([`campaign`]) writes the same way:
 //!
-//! 1. [`DynExperiment::assess`]: parse the scenario, apply `--runs` / `--seed`, check,
-//!    estimate the cost against the limits;
+//! 1. [`DynExperiment::assess`]: parse the scenario (once: nothing after this step reads
+//!    the text), apply `--runs` / `--seed`, check, estimate the cost against the limits;
 //! 2. [`OutDir::claim`]: lock the output folder, refuse one holding files fathom did
 //!    not write (unless forced) and check that it can be written ([`fathom_report::outdir`]);
-//! 3. [`DynExperiment::execute`]: prepare, run the Monte Carlo batches, analyse;
+//! 3. [`Assessed::execute`]: prepare, run the Monte Carlo batches, analyse;
 //! 4. write the experiment's figures and CSV files, `summary.json` and `report.md`
 //!    (header, the table, the claims, the experiment's notes, links to the figures)
 //!    into the claimed temporary folder, then [`OutDir::commit`] moves it into place
@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::SimError;
-use crate::experiment::{DynExperiment, Executed, Job};
+use crate::experiment::{Assessed, DynExperiment, Executed, Job};
 use fathom_report::output::{Summary, write_summary_json, write_text, write_with};
 
 pub use fathom_report::outdir::{OutDir, RUN_INFO_FILE, RunInfo, write_file_atomically};
@@ -124,12 +124,27 @@ pub fn execute_to(
     out_dir: &Path,
     options: &WriteOptions,
 ) -> Result<(ExperimentResult, RunInfo), SimError> {
-    exp.assess(job)?;
+    execute_assessed_to(exp, exp.assess(job)?, job, out_dir, options)
+}
+
+/// [`execute_to`] of a job already assessed (`fathom run` assessed it to print the
+/// estimate): the scenario is not parsed again.
+///
+/// # Errors
+/// A refused output folder (before anything is computed or written), then the
+/// experiment's errors, then I/O errors.
+pub fn execute_assessed_to(
+    exp: &dyn DynExperiment,
+    assessed: Assessed<'_>,
+    job: &Job<'_>,
+    out_dir: &Path,
+    options: &WriteOptions,
+) -> Result<(ExperimentResult, RunInfo), SimError> {
     let claim = OutDir::claim(out_dir, options.force)?;
+    let setup = Setup::of_table(exp, &assessed.table);
     let start = Instant::now();
-    let executed = exp.execute(job)?;
+    let executed = assessed.execute()?;
     let elapsed = start.elapsed();
-    let setup = Setup::of(exp, &executed.resolved.toml);
     let mut result = write_executed(&executed, job.file, &setup, claim.dir(), elapsed)?;
     if options.scenario_files {
         write_text(claim.dir().join("scenario.toml"), job.text)?;

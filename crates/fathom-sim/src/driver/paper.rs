@@ -67,15 +67,7 @@ pub fn run_paper_to(
     out: &mut dyn Write,
 ) -> Result<PaperResult, SimError> {
     check_registry(registry)?;
-    if options.runs == Some(0) {
-        return Err(SimError::invalid_argument("--runs", "must be at least 1"));
-    }
-    if options.threads == Some(0) {
-        return Err(SimError::invalid_argument(
-            "--threads",
-            "must be at least 1",
-        ));
-    }
+    crate::experiment::check_overrides(options.runs, None, options.threads)?;
     let selected: Vec<&dyn DynExperiment> = match &options.only {
         Some(name) => match registry.iter().find(|e| e.name() == name) {
             Some(e) => vec![*e],

@@ -18,19 +18,23 @@ pub enum Setup {
 }
 
 impl Setup {
-    /// Compares the resolved scenario `resolved_toml` of `exp` with its preset.
+    /// Compares the resolved scenario text `resolved_toml` of `exp` with its preset.
     pub fn of(exp: &dyn DynExperiment, resolved_toml: &str) -> Setup {
-        let preset = exp
-            .resolve(exp.preset(), "preset", None, None)
-            .ok()
-            .and_then(|r| r.toml.parse::<toml::Table>().ok());
-        let mine = resolved_toml.parse::<toml::Table>().ok();
-        let (Some(preset), Some(mine)) = (preset, mine) else {
+        match resolved_toml.parse::<toml::Table>() {
+            Ok(mine) => Setup::of_table(exp, &mine),
+            Err(_) => Setup::Variant(vec!["(no preset to compare with)".into()]),
+        }
+    }
+
+    /// Compares the resolved scenario `mine` (an [`Assessed`](crate::experiment::Assessed)
+    /// job's table) of `exp` with its preset.
+    pub fn of_table(exp: &dyn DynExperiment, mine: &toml::Table) -> Setup {
+        let Some(preset) = exp.preset_table() else {
             // An experiment without a usable preset has no paper setup to compare with.
             return Setup::Variant(vec!["(no preset to compare with)".into()]);
         };
         let mut differs = Vec::new();
-        diff_tables(&preset, &mine, "", &mut differs);
+        diff_tables(&preset, mine, "", &mut differs);
         if differs.is_empty() {
             Setup::Paper
         } else {

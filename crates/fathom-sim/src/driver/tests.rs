@@ -298,3 +298,58 @@ fn seed_override_reaches_every_run_and_the_summary() {
         b.resolved.toml
     );
 }
+
+/// The labels [`ScenarioDoc::parse`](crate::scenario::ScenarioDoc::parse) saw on this
+/// thread while `f` ran.
+fn parses_during(f: impl FnOnce()) -> Vec<String> {
+    crate::scenario::PARSES.with(|p| p.borrow_mut().clear());
+    f();
+    crate::scenario::PARSES.with(|p| p.take())
+}
+
+#[test]
+fn a_run_a_check_and_a_shard_parse_the_scenario_text_once() {
+    use crate::user_run::{RunOptions, check_scenario_text, run_scenario_text};
+    let root = std::env::temp_dir()
+        .join("fathom-sim-tests")
+        .join(format!("parse-once-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&root);
+    let text = "experiment = \"dummy\"\nruns = 4\nbase_seed = 9\n";
+    let options = RunOptions {
+        scenario: "dummy.toml".into(),
+        out_dir: Some(root.join("run")),
+        runs: Some(3),
+        threads: Some(1),
+        seed: None,
+        base_dir: root.clone(),
+        force: false,
+        limits: crate::cost::Limits::default(),
+    };
+    let mine = |seen: &[String]| seen.iter().filter(|l| *l == "dummy.toml").count();
+    // The preset is parsed too (the setup comparison), never the user's text again.
+    let seen = parses_during(|| {
+        run_scenario_text(text, "dummy.toml", &options, &reg(), None).unwrap();
+    });
+    assert_eq!(mine(&seen), 1, "{seen:?}");
+    assert!(seen.iter().all(|l| l == "dummy.toml" || l == "preset"), "{seen:?}");
+    let seen = parses_during(|| {
+        check_scenario_text(text, "dummy.toml", &reg()).unwrap();
+    });
+    assert_eq!(seen, ["dummy.toml"]);
+    let seen = parses_during(|| {
+        let job = crate::user_run::job_of(text, "dummy.toml", &options, None);
+        let (exp, a) = crate::user_run::assess_scenario(&job, &reg()).unwrap();
+        let shard = crate::experiment::Shard { index: 0, count: 2 };
+        super::campaign::run_assessed_shard(exp, a, &job, shard, &root.join("shard"), false)
+            .unwrap();
+    });
+    assert_eq!(seen, ["dummy.toml"]);
+    // Negative control: the convenience `resolve` after an assessment parses again, and
+    // the counter sees it.
+    let seen = parses_during(|| {
+        let job = crate::user_run::job_of(text, "dummy.toml", &options, None);
+        let (exp, _) = crate::user_run::assess_scenario(&job, &reg()).unwrap();
+        exp.resolve(text, "dummy.toml", None, None).unwrap();
+    });
+    assert_eq!(mine(&seen), 2, "{seen:?}");
+}

@@ -8,7 +8,7 @@ use crate::SimError;
 use crate::cost::Cost;
 use crate::montecarlo::try_run_indices;
 use crate::progress::{Progress, ProgressEvent};
-use crate::scenario::{check_magnitudes, parse_toml, require_experiment, to_toml};
+use crate::scenario::{ScenarioDoc, check_magnitudes, require_experiment, to_toml};
 use fathom_report::output::Summary;
 
 /// What the driver asks of one execution of an experiment.
@@ -141,10 +141,35 @@ pub trait DynExperiment: Send + Sync {
     /// `docs/scenarios.md` is generated.
     fn schema(&self) -> schemars::Schema;
 
-    /// Parses `text`, applies the overrides and checks it (`fathom check`).
+    /// Assesses `job` once: parses its text ([`ScenarioDoc::parse`]), applies the
+    /// overrides, checks the scenario and estimates its cost, checked against
+    /// `job.env.limits`. Everything that runs is executed from the [`Assessed`] value, so
+    /// the text is never parsed again; `fathom run` calls it before it claims the output
+    /// folder.
     ///
     /// # Errors
-    /// TOML and check errors naming `file` and the key; bad overrides.
+    /// TOML and check errors naming `file` and the key; bad `--threads` / `--runs` /
+    /// `--seed`; a cost beyond the limits ([`SimError::Invalid`] naming the key).
+    fn assess<'j>(&self, job: &'j Job<'j>) -> Result<Assessed<'j>, SimError> {
+        self.assess_doc(ScenarioDoc::parse(job.text, job.file)?, job)
+    }
+
+    /// [`DynExperiment::assess`] of a text already parsed into `doc` (the front end
+    /// parsed it to pick the experiment).
+    ///
+    /// # Errors
+    /// As [`DynExperiment::assess`].
+    fn assess_doc<'j>(
+        &self,
+        doc: ScenarioDoc<'j>,
+        job: &'j Job<'j>,
+    ) -> Result<Assessed<'j>, SimError>;
+
+    /// The resolved scenario of `text` with the overrides, without the cost limits
+    /// (`fathom check` of a preset, the setup comparison, tests).
+    ///
+    /// # Errors
+    /// As [`DynExperiment::assess`] but for the limits.
     fn resolve(
         &self,
         text: &str,
@@ -153,9 +178,12 @@ pub trait DynExperiment: Send + Sync {
         seed: Option<u64>,
     ) -> Result<Resolved, SimError>;
 
-    /// Parses `text`, applies the overrides, checks it and estimates its cost on
-    /// `threads` worker threads (`None`: all cores); the cost is not checked against
-    /// any limit here.
+    /// The resolved preset as a TOML table (`None` when the preset does not check), the
+    /// reference of [`crate::driver::Setup`].
+    fn preset_table(&self) -> Option<toml::Table>;
+
+    /// The cost of `text` on `threads` worker threads (`None`: all cores), not checked
+    /// against any limit (the fuzz targets, the cost tests).
     ///
     /// # Errors
     /// As [`DynExperiment::resolve`].
@@ -168,53 +196,25 @@ pub trait DynExperiment: Send + Sync {
         threads: Option<usize>,
     ) -> Result<Cost, SimError>;
 
-    /// What [`DynExperiment::execute`] checks before it prepares anything: the
-    /// scenario with the job's overrides, its cost against `job.env.limits`, the
-    /// job's options. `fathom run` calls it before it claims the output folder.
+    /// Assesses `job` and runs the whole pipeline ([`Assessed::execute`]).
     ///
     /// # Errors
-    /// As [`DynExperiment::resolve`]; a cost beyond the limits ([`SimError::Invalid`]
-    /// naming the key); bad `--threads` / `--runs`.
-    fn assess(&self, job: &Job<'_>) -> Result<(Resolved, Cost), SimError>;
+    /// As [`DynExperiment::assess`], then preparation, run and analysis errors.
+    fn execute(&self, job: &Job<'_>) -> Result<Executed, SimError> {
+        self.assess(job)?.execute()
+    }
 
-    /// Runs the whole pipeline and returns the summary and the analysis.
+    /// Assesses `job` and prepares it ([`Assessed::plan`]).
     ///
     /// # Errors
-    /// As [`DynExperiment::resolve`], then preparation, run and analysis errors.
-    fn execute(&self, job: &Job<'_>) -> Result<Executed, SimError>;
-
-    /// Parse, override, check and prepare: the resolved scenario and the batches.
-    ///
-    /// # Errors
-    /// As [`DynExperiment::resolve`], then preparation errors.
-    fn plan(&self, job: &Job<'_>) -> Result<Plan, SimError>;
-
-    /// Runs the run indices of `shard` in every batch and hands each run's record,
-    /// serialized as JSON, to `sink` (a shard of a campaign: no analysis).
-    ///
-    /// # Errors
-    /// As [`DynExperiment::execute`], then the sink's errors.
-    fn execute_shard(
-        &self,
-        job: &Job<'_>,
-        shard: Shard,
-        sink: &mut dyn RecordSink,
-    ) -> Result<Plan, SimError>;
-
-    /// The analysis of records read back from `source` (merged shards): the same
-    /// result as [`DynExperiment::execute`] on the same runs.
-    ///
-    /// # Errors
-    /// A missing, duplicated, misplaced or corrupted record, then as
-    /// [`DynExperiment::execute`].
-    fn execute_from(
-        &self,
-        job: &Job<'_>,
-        source: &mut dyn RecordSource,
-    ) -> Result<Executed, SimError>;
+    /// As [`DynExperiment::assess`], then preparation errors.
+    fn plan(&self, job: &Job<'_>) -> Result<Plan, SimError> {
+        self.assess(job)?.plan()
+    }
 
     /// Prepares the scenario `text` and returns its main batch's run function (for
-    /// the benchmarks: the run index and the RNG in, the record dropped).
+    /// the benchmarks: the run index and the RNG in, the record dropped); no cost
+    /// limit applies.
     ///
     /// # Errors
     /// As [`DynExperiment::resolve`], then preparation errors.
@@ -226,20 +226,137 @@ pub trait DynExperiment: Send + Sync {
     ) -> Result<SingleRunFn, SimError>;
 }
 
-fn parse_with_overrides<E: Experiment>(
+/// A job assessed once ([`DynExperiment::assess`]): the scenario parsed, the overrides
+/// applied, checked and costed. It runs in one of four ways, each consuming it.
+pub struct Assessed<'j> {
+    /// The resolved scenario.
+    pub resolved: Resolved,
+    /// The estimated cost on the job's threads.
+    pub cost: Cost,
+    /// The resolved scenario as a TOML table (the setup against the preset, the key
+    /// counts of `fathom check`).
+    pub table: toml::Table,
+    run: Box<dyn Runnable + 'j>,
+}
+
+impl std::fmt::Debug for Assessed<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Assessed")
+            .field("resolved", &self.resolved)
+            .field("cost", &self.cost)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Assessed<'_> {
+    /// Prepares, runs every batch and analyses: the summary and the analysis.
+    ///
+    /// # Errors
+    /// Preparation, run and analysis errors.
+    pub fn execute(self) -> Result<Executed, SimError> {
+        self.run.execute()
+    }
+
+    /// Prepares: the resolved scenario and the batches.
+    ///
+    /// # Errors
+    /// Preparation errors.
+    pub fn plan(self) -> Result<Plan, SimError> {
+        self.run.plan()
+    }
+
+    /// Runs the run indices of `shard` in every batch and hands each run's record,
+    /// serialized as JSON, to `sink` (a shard of a campaign: no analysis).
+    ///
+    /// # Errors
+    /// As [`Assessed::execute`], then the sink's errors.
+    pub fn execute_shard(self, shard: Shard, sink: &mut dyn RecordSink) -> Result<Plan, SimError> {
+        self.run.execute_shard(shard, sink)
+    }
+
+    /// The analysis of records read back from `source` (merged shards): the same
+    /// result as [`Assessed::execute`] on the same runs.
+    ///
+    /// # Errors
+    /// A missing, duplicated, misplaced or corrupted record, then as
+    /// [`Assessed::execute`].
+    pub fn execute_from(self, source: &mut dyn RecordSource) -> Result<Executed, SimError> {
+        self.run.execute_from(source)
+    }
+}
+
+/// The typed side of an [`Assessed`] job.
+trait Runnable {
+    fn execute(self: Box<Self>) -> Result<Executed, SimError>;
+    fn plan(self: Box<Self>) -> Result<Plan, SimError>;
+    fn execute_shard(
+        self: Box<Self>,
+        shard: Shard,
+        sink: &mut dyn RecordSink,
+    ) -> Result<Plan, SimError>;
+    fn execute_from(self: Box<Self>, source: &mut dyn RecordSource) -> Result<Executed, SimError>;
+}
+
+/// An experiment with its checked scenario and the job it came from.
+struct Typed<'j, E: Experiment> {
+    exp: E,
+    job: &'j Job<'j>,
+    checked: E::Checked,
+    resolved: Resolved,
+}
+
+/// The overrides' own rules, the same for every front end: `--runs` and `--threads` at
+/// least 1, `--seed` at most 2^63 - 1 (the largest TOML integer, so that the resolved
+/// scenario can record it).
+///
+/// # Errors
+/// [`SimError::InvalidArgument`] naming the option.
+pub fn check_overrides(
+    runs: Option<usize>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+) -> Result<(), SimError> {
+    if runs == Some(0) {
+        return Err(SimError::invalid_argument("--runs", "must be at least 1"));
+    }
+    if threads == Some(0) {
+        return Err(SimError::invalid_argument(
+            "--threads",
+            "must be at least 1",
+        ));
+    }
+    if let Some(s) = seed
+        && i64::try_from(s).is_err()
+    {
+        return Err(SimError::invalid_argument("--seed", seed_too_large(s)));
+    }
+    Ok(())
+}
+
+fn seed_too_large(s: u64) -> String {
+    format!(
+        "must be at most {} (2^63 - 1, the largest TOML integer, so that the resolved \
+         scenario can record it), got {s}",
+        i64::MAX
+    )
+}
+
+/// Reads the typed scenario from `doc`, applies the overrides and checks it.
+fn read_checked<E: Experiment>(
     exp: &E,
-    text: &str,
-    file: &str,
+    doc: ScenarioDoc<'_>,
     runs: Option<usize>,
     seed: Option<u64>,
 ) -> Result<(E::Scenario, E::Checked, Resolved), SimError> {
-    let mut scenario: E::Scenario = parse_toml(text, file)?;
+    let file = doc.file();
+    let as_written = doc.table().ok();
+    let mut scenario: E::Scenario = doc.into_typed()?;
     require_experiment(file, scenario.experiment(), E::NAME)?;
-    check_magnitudes(text, file)?;
+    if let Some(table) = &as_written {
+        check_magnitudes(table, file)?;
+    }
+    check_overrides(runs, seed, None)?;
     if let Some(n) = runs {
-        if n == 0 {
-            return Err(SimError::invalid_argument("--runs", "must be at least 1"));
-        }
         // A deterministic experiment has no run count to replace (`cargo xtask paper
         // --runs N` applies to every experiment).
         scenario.set_runs(n);
@@ -260,15 +377,7 @@ fn parse_with_overrides<E: Experiment>(
     if let Some(s) = scenario.base_seed()
         && i64::try_from(s).is_err()
     {
-        let reason = format!(
-            "must be at most {} (2^63 - 1, the largest TOML integer, so that the resolved \
-             scenario can record it), got {s}",
-            i64::MAX
-        );
-        return Err(match seed {
-            Some(_) => SimError::invalid_argument("--seed", reason),
-            None => SimError::invalid(file, "base_seed", reason),
-        });
+        return Err(SimError::invalid(file, "base_seed", seed_too_large(s)));
     }
     let checked = exp.check(&scenario, file).map_err(|e| match e {
         // A run count the user gave with --runs is reported as the option's.
@@ -293,36 +402,27 @@ fn cost_of<E: Experiment>(exp: &E, scenario: &E::Scenario, threads: Option<usize
     Cost::new(exp.cost(scenario), threads)
 }
 
-/// Parse, override, check, estimate the cost against the limits; what `fathom run`
-/// checks before it touches the output folder.
-fn assess<E: Experiment>(exp: &E, job: &Job<'_>) -> Result<(E::Checked, Resolved, Cost), SimError> {
-    if job.threads == Some(0) {
-        return Err(SimError::invalid_argument(
-            "--threads",
-            "must be at least 1",
-        ));
-    }
-    let (scenario, checked, resolved) =
-        parse_with_overrides(exp, job.text, job.file, job.runs, job.seed)?;
-    let cost = cost_of(exp, &scenario, job.threads);
-    cost.check(&job.env.limits, job.file)?;
-    Ok((checked, resolved, cost))
+/// The resolved scenario as a TOML table (the same table as the resolved text parsed
+/// back: tested for every preset in `fathom-experiments`).
+fn table_of<T: serde::Serialize>(scenario: &T, file: &str) -> Result<toml::Table, SimError> {
+    toml::Table::try_from(scenario)
+        .map_err(|e| SimError::invalid_argument(format!("scenario `{file}`"), e.to_string()))
 }
 
-/// Parse, override, check, cost and prepare; the batches of the prepared experiment.
-/// Preparation errors (a data folder, the scenario's values in a model's checks) are
-/// the user's input ([`SimError::Input`]).
-fn plan<E: Experiment>(
+/// Prepares the checked scenario: what the runs share and the batches. Preparation
+/// errors (a data folder, the scenario's values in a model's checks) are the user's
+/// input ([`SimError::Input`]).
+fn prepare_with<E: Experiment>(
     exp: &E,
     job: &Job<'_>,
-) -> Result<(Resolved, E::Prepared, Vec<Batch>), SimError> {
-    let (checked, resolved, _) = assess(exp, job)?;
+    checked: E::Checked,
+) -> Result<(E::Prepared, Vec<Batch>), SimError> {
     let prepared = exp.prepare(checked, &job.env).map_err(|e| match e {
         e if e.is_user_error() => e,
         e => SimError::Input(Box::new(e)),
     })?;
     let batches = exp.batches(&prepared);
-    Ok((resolved, prepared, batches))
+    Ok((prepared, batches))
 }
 
 /// Runs the indices `range` of batch `b` in chunks (parallel within a chunk) and hands
@@ -428,6 +528,29 @@ impl<E: Experiment> DynExperiment for E {
         schemars::schema_for!(E::Scenario)
     }
 
+    fn assess_doc<'j>(
+        &self,
+        doc: ScenarioDoc<'j>,
+        job: &'j Job<'j>,
+    ) -> Result<Assessed<'j>, SimError> {
+        check_overrides(job.runs, job.seed, job.threads)?;
+        let (scenario, checked, resolved) = read_checked(self, doc, job.runs, job.seed)?;
+        let table = table_of(&scenario, job.file)?;
+        let cost = cost_of(self, &scenario, job.threads);
+        cost.check(&job.env.limits, job.file)?;
+        Ok(Assessed {
+            resolved: resolved.clone(),
+            cost,
+            table,
+            run: Box::new(Typed {
+                exp: self.clone(),
+                job,
+                checked,
+                resolved,
+            }),
+        })
+    }
+
     fn resolve(
         &self,
         text: &str,
@@ -435,7 +558,13 @@ impl<E: Experiment> DynExperiment for E {
         runs: Option<usize>,
         seed: Option<u64>,
     ) -> Result<Resolved, SimError> {
-        parse_with_overrides(self, text, file, runs, seed).map(|(_, _, r)| r)
+        read_checked(self, ScenarioDoc::parse(text, file)?, runs, seed).map(|(_, _, r)| r)
+    }
+
+    fn preset_table(&self) -> Option<toml::Table> {
+        let doc = ScenarioDoc::parse(E::PRESET, "preset").ok()?;
+        let (scenario, _, _) = read_checked(self, doc, None, None).ok()?;
+        table_of(&scenario, "preset").ok()
     }
 
     fn cost(
@@ -446,16 +575,40 @@ impl<E: Experiment> DynExperiment for E {
         seed: Option<u64>,
         threads: Option<usize>,
     ) -> Result<Cost, SimError> {
-        let (scenario, _, _) = parse_with_overrides(self, text, file, runs, seed)?;
+        let (scenario, _, _) = read_checked(self, ScenarioDoc::parse(text, file)?, runs, seed)?;
         Ok(cost_of(self, &scenario, threads))
     }
 
-    fn assess(&self, job: &Job<'_>) -> Result<(Resolved, Cost), SimError> {
-        assess(self, job).map(|(_, r, c)| (r, c))
+    fn single_run(
+        &self,
+        text: &str,
+        file: &str,
+        env: &Environment,
+    ) -> Result<SingleRunFn, SimError> {
+        let (_, checked, _) = read_checked(self, ScenarioDoc::parse(text, file)?, None, None)?;
+        let prepared = self.prepare(checked, env)?;
+        if self.batches(&prepared).is_empty() {
+            return Err(SimError::invalid_argument(
+                format!("experiment `{}`", E::NAME),
+                "has no Monte Carlo batch to run",
+            ));
+        }
+        let exp = self.clone();
+        Ok(Box::new(move |i, rng| {
+            exp.run(&prepared, 0, i, rng).map(|_| ())
+        }))
     }
+}
 
-    fn execute(&self, job: &Job<'_>) -> Result<Executed, SimError> {
-        let (resolved, prepared, batches) = plan(self, job)?;
+impl<E: Experiment> Runnable for Typed<'_, E> {
+    fn execute(self: Box<Self>) -> Result<Executed, SimError> {
+        let Typed {
+            exp,
+            job,
+            checked,
+            resolved,
+        } = *self;
+        let (prepared, batches) = prepare_with(&exp, job, checked)?;
         let seed = resolved.base_seed.unwrap_or(0);
         let mut kept = Vec::with_capacity(batches.len());
         let mut folds = Vec::with_capacity(batches.len());
@@ -463,7 +616,7 @@ impl<E: Experiment> DynExperiment for E {
             let mut fold = E::Fold::default();
             let mut k = Vec::with_capacity(batch.runs);
             run_batch(
-                self,
+                &exp,
                 job,
                 &prepared,
                 b,
@@ -471,28 +624,44 @@ impl<E: Experiment> DynExperiment for E {
                 0..batch.runs,
                 seed,
                 |i, record| {
-                    k.push(self.fold(&prepared, b, i, record, &mut fold));
+                    k.push(exp.fold(&prepared, b, i, record, &mut fold));
                     Ok(())
                 },
             )?;
             kept.push(k);
             folds.push(fold);
         }
-        finish(self, &prepared, resolved, &batches, kept, folds)
+        finish(&exp, &prepared, resolved, &batches, kept, folds)
+    }
+
+    fn plan(self: Box<Self>) -> Result<Plan, SimError> {
+        let Typed {
+            exp,
+            job,
+            checked,
+            resolved,
+        } = *self;
+        let (_, batches) = prepare_with(&exp, job, checked)?;
+        Ok(Plan { resolved, batches })
     }
 
     fn execute_shard(
-        &self,
-        job: &Job<'_>,
+        self: Box<Self>,
         shard: Shard,
         sink: &mut dyn RecordSink,
     ) -> Result<Plan, SimError> {
-        let (resolved, prepared, batches) = plan(self, job)?;
+        let Typed {
+            exp,
+            job,
+            checked,
+            resolved,
+        } = *self;
+        let (prepared, batches) = prepare_with(&exp, job, checked)?;
         let seed = resolved.base_seed.unwrap_or(0);
         for (b, batch) in batches.iter().enumerate() {
             let range = shard.range(batch.runs);
             sink.begin_batch(b, batch, range.clone())?;
-            run_batch(self, job, &prepared, b, batch, range, seed, |i, record| {
+            run_batch(&exp, job, &prepared, b, batch, range, seed, |i, record| {
                 let json = serde_json::to_string(&record).map_err(|e| SimError::Json {
                     path: format!("record of run {i} of batch `{}`", batch.label).into(),
                     source: e,
@@ -503,12 +672,14 @@ impl<E: Experiment> DynExperiment for E {
         Ok(Plan { resolved, batches })
     }
 
-    fn execute_from(
-        &self,
-        job: &Job<'_>,
-        source: &mut dyn RecordSource,
-    ) -> Result<Executed, SimError> {
-        let (resolved, prepared, batches) = plan(self, job)?;
+    fn execute_from(self: Box<Self>, source: &mut dyn RecordSource) -> Result<Executed, SimError> {
+        let Typed {
+            exp,
+            job,
+            checked,
+            resolved,
+        } = *self;
+        let (prepared, batches) = prepare_with(&exp, job, checked)?;
         let mut kept = Vec::with_capacity(batches.len());
         let mut folds = Vec::with_capacity(batches.len());
         for (b, batch) in batches.iter().enumerate() {
@@ -532,7 +703,7 @@ impl<E: Experiment> DynExperiment for E {
                         path: found.origin.clone().into(),
                         source: e,
                     })?;
-                k.push(self.fold(&prepared, b, i, record, &mut fold));
+                k.push(exp.fold(&prepared, b, i, record, &mut fold));
             }
             if let Some(extra) = source.next(b)? {
                 return Err(SimError::invalid_argument(
@@ -546,31 +717,6 @@ impl<E: Experiment> DynExperiment for E {
             kept.push(k);
             folds.push(fold);
         }
-        finish(self, &prepared, resolved, &batches, kept, folds)
-    }
-
-    fn plan(&self, job: &Job<'_>) -> Result<Plan, SimError> {
-        let (resolved, _, batches) = plan(self, job)?;
-        Ok(Plan { resolved, batches })
-    }
-
-    fn single_run(
-        &self,
-        text: &str,
-        file: &str,
-        env: &Environment,
-    ) -> Result<SingleRunFn, SimError> {
-        let (_, checked, _) = parse_with_overrides(self, text, file, None, None)?;
-        let prepared = self.prepare(checked, env)?;
-        if self.batches(&prepared).is_empty() {
-            return Err(SimError::invalid_argument(
-                format!("experiment `{}`", E::NAME),
-                "has no Monte Carlo batch to run",
-            ));
-        }
-        let exp = self.clone();
-        Ok(Box::new(move |i, rng| {
-            exp.run(&prepared, 0, i, rng).map(|_| ())
-        }))
+        finish(&exp, &prepared, resolved, &batches, kept, folds)
     }
 }

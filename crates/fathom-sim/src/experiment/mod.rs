@@ -46,8 +46,8 @@ use crate::cost::{CostTerm, Limits};
 
 pub use analysis::{Analysis, FileContent, OutputFile};
 pub use dynamic::{
-    DynExperiment, Executed, FoundRecord, Job, Plan, RecordSink, RecordSource, Resolved, Shard,
-    SingleRunFn,
+    Assessed, DynExperiment, Executed, FoundRecord, Job, Plan, RecordSink, RecordSource, Resolved,
+    Shard, SingleRunFn, check_overrides,
 };
 
 /// The header keys every scenario file has, read and overridden by the driver.
