@@ -2,7 +2,7 @@
 //!
 //! Library crates never print (see ARCHITECTURE.md). Long Monte Carlo batches instead
 //! report [`ProgressEvent`]s to an optional [`Progress`] hook carried by the
-//! [`ExperimentContext`](crate::ExperimentContext); the `fathom` binary implements it
+//! [`Job`](crate::experiment::Job); the `fathom` binary implements it
 //! with a progress bar on a terminal. The hook only observes: it receives no RNG, no
 //! result and cannot change the order of the runs, so results are bit-identical with
 //! or without it, whatever the thread count.

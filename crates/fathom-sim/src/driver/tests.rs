@@ -331,7 +331,10 @@ fn a_run_a_check_and_a_shard_parse_the_scenario_text_once() {
         run_scenario_text(text, "dummy.toml", &options, &reg(), None).unwrap();
     });
     assert_eq!(mine(&seen), 1, "{seen:?}");
-    assert!(seen.iter().all(|l| l == "dummy.toml" || l == "preset"), "{seen:?}");
+    assert!(
+        seen.iter().all(|l| l == "dummy.toml" || l == "preset"),
+        "{seen:?}"
+    );
     let seen = parses_during(|| {
         check_scenario_text(text, "dummy.toml", &reg()).unwrap();
     });

@@ -28,7 +28,7 @@
 //! batches or on how the runs are split.
 //!
 //! [`DynExperiment`] is the object-safe face of an experiment, implemented for every
-//! [`Experiment`]; the registry ([`crate::experiments::registry`]) is one list of
+//! [`Experiment`]; the registry (`fathom_experiments::registry`, handed to the driver) is one list of
 //! them, read by `fathom list / run / check`, `cargo xtask paper`, the benchmarks and
 //! the fuzz targets.
 
