@@ -2,17 +2,16 @@
 //! statistics, and the single-run figures of the figure run (paths, estimate versus
 //! truth, sample times).
 
-use fathom_sensors::BeaconSuiteData;
-use fathom_traj::{Trajectory, velocity_command::VelocityCommandMotion};
+use fathom_traj::velocity_command::VelocityCommandMotion;
 
 use super::analysis::main_case;
-use super::run::{BatchSums, KeptStats, simulate_run};
+use super::detail::SAMPLE_WINDOW;
+use super::run::{BatchSums, KeptStats};
 use super::scenario::Checked;
 use super::{MAIN_CASE, method};
 use fathom_report::plot::{LinePlot, PlanPlot, Series, Timeline};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
-use fathom_sim::montecarlo::run_rng;
 
 /// Adds every figure and CSV file to `out`.
 pub(super) fn write(
@@ -82,9 +81,13 @@ pub(super) fn write(
     let h: Vec<&str> = headers.iter().map(String::as_str).collect();
     out.csv_owned_columns("per_run_stats.csv", &h, cols)?;
 
-    // Single-run figures: recompute the figure run (deterministic).
-    let mut rng = run_rng(checked.base_seed, checked.figure_run);
-    let detail = simulate_run(checked, &mut rng)?;
+    // Single-run figures: the figure run's detail, from its own record.
+    let detail = sums.figure.as_deref().ok_or_else(|| {
+        SimError::invalid_argument(
+            "beacons figures",
+            format!("run {} carried no figure detail", checked.figure_run),
+        )
+    })?;
     let main = main_case(checked);
     let commanded = VelocityCommandMotion::commanded(
         &checked
@@ -93,12 +96,12 @@ pub(super) fn write(
             .map_err(|e| SimError::model("motion parameters", e))?,
     )
     .map_err(|e| SimError::model("commanded motion", e))?;
-    let en = |m: &VelocityCommandMotion| -> Vec<(f64, f64)> {
-        m.samples()
-            .iter()
-            .map(|s| (s.pos_in_nav.y, s.pos_in_nav.x))
-            .collect()
-    };
+    let commanded_ned: Vec<[f64; 4]> = commanded
+        .samples()
+        .iter()
+        .map(|s| [s.time, s.pos_in_nav.x, s.pos_in_nav.y, s.pos_in_nav.z])
+        .collect();
+    let en = |m: &[[f64; 4]]| -> Vec<(f64, f64)> { m.iter().map(|s| (s[2], s[1])).collect() };
     let beacons: Vec<(f64, f64)> = checked.cases[main]
         .setup
         .beacons
@@ -113,38 +116,21 @@ pub(super) fn write(
         "east (m)",
         "north (m)",
     )
-    .with_path(Series::new("commanded", en(&commanded)))
-    .with_path(Series::new("actual", en(&detail.motion)))
+    .with_path(Series::new("commanded", en(&commanded_ned)))
+    .with_path(Series::new("actual", en(&detail.actual)))
     .with_markers(Series::new("beacons", beacons));
     out.figure("path_plan.svg", &plan)?;
-    let depth = |m: &VelocityCommandMotion| -> Vec<(f64, f64)> {
-        m.samples()
-            .iter()
-            .map(|s| (s.time, s.pos_in_nav.z))
-            .collect()
-    };
+    let depth = |m: &[[f64; 4]]| -> Vec<(f64, f64)> { m.iter().map(|s| (s[0], s[3])).collect() };
     let mut p = LinePlot::new("commanded vs actual depth", "time (s)", "depth (m)");
-    p.series.push(Series::new("commanded", depth(&commanded)));
-    p.series.push(Series::new("actual", depth(&detail.motion)));
+    p.series
+        .push(Series::new("commanded", depth(&commanded_ned)));
+    p.series.push(Series::new("actual", depth(&detail.actual)));
     out.figure("path_depth.svg", &p)?;
 
-    let (data, runs) = &detail.cases[main];
     // The single-run estimate figures show SC (or the first scheme run without it).
-    let fig = schemes
-        .iter()
-        .position(|s| s.short_name() == "SC")
-        .unwrap_or(0);
-    let (sc, fig_name) = (&runs[fig], schemes[fig].short_name());
-    let truth_at = |t: f64| {
-        detail
-            .motion
-            .state_at(t)
-            .map_err(|e| SimError::model("truth", e))
-    };
-    let mut truth_pts = Vec::with_capacity(sc.times.len());
-    for &t in &sc.times {
-        truth_pts.push(truth_at(t)?);
-    }
+    let runs = &detail.schemes;
+    let (sc, fig_name) = (&runs[detail.shown], schemes[detail.shown].short_name());
+    let truth_pts = &detail.truth_at_eval;
     let plan = PlanPlot::new(
         format!(
             "{fig_name} estimate vs truth (case {MAIN_CASE}, run {})",
@@ -155,10 +141,7 @@ pub(super) fn write(
     )
     .with_path(Series::new(
         "truth",
-        truth_pts
-            .iter()
-            .map(|s| (s.pos_in_nav.y, s.pos_in_nav.x))
-            .collect(),
+        truth_pts.iter().map(|s| (s[1], s[0])).collect(),
     ))
     .with_path(Series::new(
         format!("{fig_name} estimate"),
@@ -178,8 +161,8 @@ pub(super) fn write(
         "truth",
         sc.times
             .iter()
-            .zip(&truth_pts)
-            .map(|(t, s)| (*t, s.pos_in_nav.z))
+            .zip(truth_pts)
+            .map(|(t, s)| (*t, s[2]))
             .collect(),
     ));
     p.series.push(Series::new(
@@ -205,10 +188,9 @@ pub(super) fn write(
     }
     out.figure("error_vs_time_single_run.svg", &p)?;
     let mut cols: Vec<Vec<f64>> = vec![sc.times.clone()];
-    cols.push(truth_pts.iter().map(|s| s.pos_in_nav.x).collect());
-    cols.push(truth_pts.iter().map(|s| s.pos_in_nav.y).collect());
-    cols.push(truth_pts.iter().map(|s| s.pos_in_nav.z).collect());
-    cols.push(truth_pts.iter().map(|s| s.attitude.yaw).collect());
+    for k in 0..4 {
+        cols.push(truth_pts.iter().map(|s| s[k]).collect());
+    }
     let mut headers = vec![
         "time_s",
         "true_north_m",
@@ -234,50 +216,15 @@ pub(super) fn write(
 
     // Sample-time diagram from the figure run's actual data: async (main case) and
     // sync (the sync case, if any), with the SC/SI epochs.
-    let window = (0.0, 1.0);
-    let times_of = |v: Vec<f64>| {
-        v.into_iter()
-            .filter(|t| *t <= window.1 + 1e-9)
-            .collect::<Vec<_>>()
-    };
-    let mut rows = Vec::new();
-    let label = |d: &BeaconSuiteData, prefix: &str, rows: &mut Vec<(String, Vec<f64>)>| {
-        rows.push((
-            format!("{prefix}DVL"),
-            times_of(d.dvl.iter().map(|m| m.sample_time).collect()),
-        ));
-        rows.push((
-            format!("{prefix}AHRS"),
-            times_of(d.ahrs_rate.iter().map(|m| m.sample_time).collect()),
-        ));
-        for (k, r) in d.ranges.iter().enumerate() {
-            rows.push((
-                format!("{prefix}range{}", k + 1),
-                times_of(r.iter().map(|m| m.sample_time).collect()),
-            ));
-        }
-        rows.push((
-            format!("{prefix}depth"),
-            times_of(d.depth.iter().map(|m| m.sample_time).collect()),
-        ));
-    };
-    label(data, "async: ", &mut rows);
-    if let Some(si) = checked.cases.iter().position(|c| c.config.is_synchronous()) {
-        let d = &detail.cases[si].0;
-        rows.push((
-            "sync: all sensors".into(),
-            times_of(d.depth.iter().map(|m| m.sample_time).collect()),
-        ));
-    }
+    let window = SAMPLE_WINDOW;
+    let mut rows = detail.sample_rows.clone();
     let period = checked.cases[main].setup.settings.epoch_period;
     rows.push((
         "SC/SI epochs".into(),
-        times_of(
-            (1..)
-                .map(|j| j as f64 * period)
-                .take_while(|t| *t <= window.1 + 1e-9)
-                .collect(),
-        ),
+        (1..)
+            .map(|j| j as f64 * period)
+            .take_while(|t| *t <= window.1 + 1e-9)
+            .collect(),
     ));
     let timeline = Timeline::new(
         format!(

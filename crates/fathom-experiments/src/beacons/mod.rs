@@ -24,6 +24,7 @@
 
 mod analysis;
 mod cost;
+mod detail;
 mod figures;
 pub mod filter;
 mod paper;
@@ -59,7 +60,7 @@ impl Experiment for Beacons {
     type Prepared = Checked;
     /// Per case, per scheme (AS, SC, SI): the run's statistics (a layout batch has
     /// the main case only).
-    type Record = Vec<Vec<SchemeStats>>;
+    type Record = run::RunRecord;
     type Kept = Vec<Vec<KeptStats>>;
     type Fold = BatchSums;
 
@@ -97,11 +98,11 @@ impl Experiment for Beacons {
         &self,
         checked: &Checked,
         batch: usize,
-        _index: usize,
+        index: usize,
         rng: &mut ChaCha8Rng,
     ) -> Result<Self::Record, SimError> {
         match batch {
-            0 => run::one_run(checked, rng),
+            0 => run::one_run(checked, index, rng),
             layout => run::one_layout_run(checked, layout - 1, rng),
         }
     }

@@ -7,6 +7,7 @@ use fathom_stats::RunStats;
 use fathom_traj::velocity_command::VelocityCommandMotion;
 use rand_chacha::ChaCha8Rng;
 
+use super::detail::{FigureDetail, figure_detail};
 use super::filter::{SchemeRun, events, run_scheme_on};
 use super::scenario::{Case, Checked};
 use crate::common::generate_motion;
@@ -76,9 +77,29 @@ pub struct SmoothedStats {
 
 pub(super) fn one_run(
     checked: &Checked,
+    index: usize,
     rng: &mut ChaCha8Rng,
-) -> Result<Vec<Vec<SchemeStats>>, SimError> {
-    stats_of(simulate_run(checked, rng)?)
+) -> Result<RunRecord, SimError> {
+    let run = simulate_run(checked, rng)?;
+    // The figure run keeps what its figures draw (the detail run).
+    let figure = if index == checked.figure_run {
+        Some(Box::new(figure_detail(checked, &run)?))
+    } else {
+        None
+    };
+    Ok(RunRecord {
+        stats: stats_of(run)?,
+        figure,
+    })
+}
+
+/// What one run returns: per case and scheme its statistics, and for the figure run
+/// its figure detail.
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
+pub struct RunRecord {
+    pub(super) stats: Vec<Vec<SchemeStats>>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) figure: Option<Box<FigureDetail>>,
 }
 
 /// One run of the main case under beacon layout `layout` of the geometry sensitivity.
@@ -86,9 +107,12 @@ pub(super) fn one_layout_run(
     checked: &Checked,
     layout: usize,
     rng: &mut ChaCha8Rng,
-) -> Result<Vec<Vec<SchemeStats>>, SimError> {
+) -> Result<RunRecord, SimError> {
     let case = std::slice::from_ref(&checked.layouts[layout].case);
-    stats_of(simulate_cases(checked, case, rng)?)
+    Ok(RunRecord {
+        stats: stats_of(simulate_cases(checked, case, rng)?)?,
+        figure: None,
+    })
 }
 
 /// What the analysis keeps of one scheme on one case of one run (the per-run scalars
@@ -126,10 +150,16 @@ pub struct SchemeSums {
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct BatchSums {
     pub(super) cases: Vec<Vec<SchemeSums>>,
+    /// The figure run's detail (main batch only).
+    pub(super) figure: Option<Box<FigureDetail>>,
 }
 
 /// Folds one run's record into `sums` and returns what the analysis keeps of it.
-pub(super) fn fold_run(record: Vec<Vec<SchemeStats>>, sums: &mut BatchSums) -> Vec<Vec<KeptStats>> {
+pub(super) fn fold_run(record: RunRecord, sums: &mut BatchSums) -> Vec<Vec<KeptStats>> {
+    if record.figure.is_some() {
+        sums.figure = record.figure;
+    }
+    let record = record.stats;
     if sums.cases.is_empty() {
         sums.cases = record
             .iter()

@@ -250,7 +250,6 @@ pub struct Checked {
     /// The geometry sensitivity's layouts.
     pub(super) layouts: Vec<Layout>,
     pub(super) runs: usize,
-    pub(super) base_seed: u64,
     pub(super) motion: VelocityCommandParams,
     pub(super) figure_run: usize,
     /// Hold time of the common-mode range noise, s.
@@ -476,7 +475,6 @@ impl BeaconsScenario {
             schemes,
             smooth: self.smooth,
             runs,
-            base_seed: self.base_seed,
             motion,
             figure_run: self.figures.run,
             corr_gap: n.corr_gap_s,

@@ -6,7 +6,7 @@ use fathom_stats::{mean_ci, mean_interval};
 use nalgebra::DMatrix;
 
 use super::paper::paper_matrix;
-use super::run::{LongRun, long_run};
+use super::run::LongRun;
 use super::scenario::Checked;
 use fathom_report::output::{Claim, Row, fixed as f};
 use fathom_sim::SimError;
@@ -67,6 +67,7 @@ pub(super) struct CaseResult {
 /// and the report are drawn from.
 pub(super) fn analyse(
     checked: &Checked,
+    long_runs: &[LongRun],
     per_run: &[Vec<DMatrix<f64>>],
     out: &mut Analysis,
 ) -> Result<Vec<CaseResult>, SimError> {
@@ -163,7 +164,7 @@ pub(super) fn analyse(
                 .fold(0.0_f64, f64::max)
         });
 
-        let long = long_run(checked, case, &design, checked.period)?;
+        let long = long_runs[ci].clone();
         out.unit("long_run_max_rel_dev", "1");
         out.row(Row::new(
             &case.name,

@@ -1,17 +1,15 @@
 //! The `noise` figures (heat maps of the mean, design and printed covariances, the
 //! long run's convergence, the sample-time diagram) and the per-run CSV file.
 
-use fathom_sensors::{Timing, schedule::ClockParams};
 use nalgebra::DMatrix;
-use rand_chacha::ChaCha8Rng;
 
 use super::LABELS;
 use super::analysis::CaseResult;
+use super::run::SAMPLE_WINDOW;
 use super::scenario::Checked;
 use fathom_report::plot::{HeatMap, LinePlot, Series, Timeline};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
-use fathom_sim::montecarlo::run_rng;
 
 fn labels() -> Vec<String> {
     LABELS.iter().map(|s| (*s).to_owned()).collect()
@@ -35,6 +33,7 @@ pub(super) fn write(
     checked: &Checked,
     per_run: &[Vec<DMatrix<f64>>],
     results: &[CaseResult],
+    sample_rows: Option<&[(String, Vec<f64>)]>,
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let mut convergence_series = Vec::new();
@@ -89,8 +88,8 @@ pub(super) fn write(
         ],
     ));
     out.figure("convergence.svg", &conv)?;
-    if let Some(timeline) = sample_time_diagram(checked)? {
-        out.figure("sample_times.svg", &timeline)?;
+    if let Some(rows) = sample_rows {
+        out.figure("sample_times.svg", &sample_time_diagram(rows))?;
     }
 
     let run_col: Vec<f64> = (0..checked.runs).map(|r| r as f64).collect();
@@ -101,57 +100,13 @@ pub(super) fn write(
     out.csv_columns("per_run_covariance.csv", &headers, &cols)
 }
 
-/// The sample-time diagram: synchronous vs asynchronous clocks over one second.
-fn sample_time_diagram(checked: &Checked) -> Result<Option<Timeline>, SimError> {
-    let mut rng = run_rng(checked.base_seed, usize::MAX - 1);
-    let window = (0.0, 1.0);
-    let jitter = checked.jitter_sigma;
-    let make = |name: &str, period: f64, rng: &mut ChaCha8Rng| -> Result<Vec<f64>, SimError> {
-        let clock = ClockParams {
-            jitter_sigma: jitter.min(period / 5.0),
-            ..ClockParams::with_period(period)
-        }
-        .check(name)
-        .map_err(|e| SimError::model("sample-time diagram", e))?;
-        Ok(clock
-            .generate(0.0, window.1, rng)
-            .map_err(|e| SimError::model("sample-time diagram", e))?
-            .sample_times()
-            .to_vec())
-    };
-    let sync = make("sync", checked.period, &mut rng)?;
-    let Timing::Asynchronous {
-        dvl,
-        ahrs,
-        range,
-        depth,
-    } = Timing::paper_async()
-    else {
-        return Ok(None);
-    };
-    let mut rows = vec![("sync: all sensors".to_owned(), sync)];
-    rows.push((
-        format!("async: DVL ({dvl:.2} s)"),
-        make("dvl", dvl, &mut rng)?,
-    ));
-    rows.push((
-        format!("async: AHRS ({ahrs:.2} s)"),
-        make("ahrs", ahrs, &mut rng)?,
-    ));
-    for k in 1..=4 {
-        rows.push((
-            format!("async: range{k} ({range:.2} s)"),
-            make("range", range, &mut rng)?,
-        ));
-    }
-    rows.push((
-        format!("async: depth ({depth:.2} s)"),
-        make("depth", depth, &mut rng)?,
-    ));
-    Ok(Some(Timeline::new(
+/// The sample-time diagram: synchronous vs asynchronous clocks over one second, from
+/// the clocks drawn when the experiment was prepared.
+fn sample_time_diagram(rows: &[(String, Vec<f64>)]) -> Timeline {
+    Timeline::new(
         "sensor sample times: synchronous vs asynchronous (Table 3)",
         "time (s)",
-        rows,
-        Some(window),
-    )))
+        rows.to_vec(),
+        Some(SAMPLE_WINDOW),
+    )
 }

@@ -38,6 +38,15 @@ use fathom_sim::experiment::{Analysis, Batch, Environment, Experiment};
 /// Labels of the five noise components, in matrix order.
 const LABELS: [&str; 5] = ["range1", "range2", "range3", "range4", "depth"];
 
+/// What the runs share: the checked scenario, the convergence run of each case and the
+/// sample-time clocks of the diagram.
+#[derive(Debug, Clone)]
+pub struct Prepared {
+    checked: Checked,
+    long: Vec<run::LongRun>,
+    sample_rows: Option<run::SampleRows>,
+}
+
 /// The `noise` experiment.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct Noise;
@@ -45,7 +54,7 @@ pub struct Noise;
 impl Experiment for Noise {
     type Scenario = NoiseScenario;
     type Checked = Checked;
-    type Prepared = Checked;
+    type Prepared = Prepared;
     /// Per case, the run's 5x5 noise covariance.
     type Record = Vec<DMatrix<f64>>;
     type Kept = Self::Record;
@@ -66,27 +75,43 @@ impl Experiment for Noise {
         cost::terms(scenario)
     }
 
-    fn prepare(&self, checked: Checked, _env: &Environment) -> Result<Checked, SimError> {
-        Ok(checked)
+    fn prepare(&self, checked: Checked, _env: &Environment) -> Result<Prepared, SimError> {
+        // The convergence runs and the sample-time clocks draw from their own streams
+        // (not the Monte Carlo runs'): drawn once here, so the analysis and the figures
+        // only read.
+        let long = checked
+            .cases
+            .iter()
+            .map(|case| {
+                let design = fathom_sensors::design_covariance(&case.config);
+                run::long_run(&checked, case, &design, checked.period)
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let sample_rows = run::sample_time_rows(&checked)?;
+        Ok(Prepared {
+            checked,
+            long,
+            sample_rows,
+        })
     }
 
-    fn batches(&self, checked: &Checked) -> Vec<Batch> {
-        vec![Batch::new(Self::NAME, checked.runs)]
+    fn batches(&self, p: &Prepared) -> Vec<Batch> {
+        vec![Batch::new(Self::NAME, p.checked.runs)]
     }
 
     fn run(
         &self,
-        checked: &Checked,
+        p: &Prepared,
         _batch: usize,
         _index: usize,
         rng: &mut ChaCha8Rng,
     ) -> Result<Self::Record, SimError> {
-        run::one_run(checked, rng)
+        run::one_run(&p.checked, rng)
     }
 
     fn fold(
         &self,
-        _prepared: &Checked,
+        _prepared: &Prepared,
         _batch: usize,
         _index: usize,
         record: Self::Record,
@@ -97,16 +122,22 @@ impl Experiment for Noise {
 
     fn analyse(
         &self,
-        checked: &Checked,
+        p: &Prepared,
         mut records: Vec<Vec<Self::Record>>,
         _folds: Vec<()>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
         let per_run = records.swap_remove(0);
         // One direction: analysis (rows, claims), then figures, then report.
-        let results = analysis::analyse(checked, &per_run, out)?;
-        figures::write(checked, &per_run, &results, out)?;
-        report::write(checked, &results, out);
+        let results = analysis::analyse(&p.checked, &p.long, &per_run, out)?;
+        figures::write(
+            &p.checked,
+            &per_run,
+            &results,
+            p.sample_rows.as_deref(),
+            out,
+        )?;
+        report::write(&p.checked, &results, out);
         Ok(())
     }
 }

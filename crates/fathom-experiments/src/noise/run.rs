@@ -1,7 +1,8 @@
 //! One `noise` run: the realised noise of every case and its zero-mean covariance,
 //! and the long convergence run.
 
-use fathom_sensors::{BeaconSuiteConfig, simulate_beacon_suite};
+use fathom_sensors::schedule::ClockParams;
+use fathom_sensors::{BeaconSuiteConfig, Timing, simulate_beacon_suite};
 use fathom_stats::covariance::max_relative_deviation;
 use nalgebra::DMatrix;
 use rand_chacha::ChaCha8Rng;
@@ -47,6 +48,7 @@ pub(super) fn one_run(
 }
 
 /// Convergence of the long run: max relative deviation after each prefix length.
+#[derive(Debug, Clone)]
 pub(super) struct LongRun {
     pub(super) cov: DMatrix<f64>,
     pub(super) max_rel_dev: f64,
@@ -91,6 +93,67 @@ pub(super) fn long_run(
         worst: (dev.row, dev.col),
         convergence,
     })
+}
+
+/// Labelled rows of sample times, s.
+pub(super) type SampleRows = Vec<(String, Vec<f64>)>;
+
+/// The sample-time diagram's window, s.
+pub(super) const SAMPLE_WINDOW: (f64, f64) = (0.0, 1.0);
+
+/// The sample times of the synchronous clock and of each asynchronous sensor clock
+/// over [`SAMPLE_WINDOW`] (stream `usize::MAX - 1` of the base seed: independent of the
+/// Monte Carlo runs); `None` when the paper's timing is not asynchronous.
+///
+/// # Errors
+/// A clock that does not check.
+pub(super) fn sample_time_rows(checked: &Checked) -> Result<Option<SampleRows>, SimError> {
+    let mut rng = run_rng(checked.base_seed, usize::MAX - 1);
+    let window = SAMPLE_WINDOW;
+    let jitter = checked.jitter_sigma;
+    let make = |name: &str, period: f64, rng: &mut ChaCha8Rng| -> Result<Vec<f64>, SimError> {
+        let clock = ClockParams {
+            jitter_sigma: jitter.min(period / 5.0),
+            ..ClockParams::with_period(period)
+        }
+        .check(name)
+        .map_err(|e| SimError::model("sample-time diagram", e))?;
+        Ok(clock
+            .generate(0.0, window.1, rng)
+            .map_err(|e| SimError::model("sample-time diagram", e))?
+            .sample_times()
+            .to_vec())
+    };
+    let sync = make("sync", checked.period, &mut rng)?;
+    let Timing::Asynchronous {
+        dvl,
+        ahrs,
+        range,
+        depth,
+    } = Timing::paper_async()
+    else {
+        return Ok(None);
+    };
+    let mut rows = vec![("sync: all sensors".to_owned(), sync)];
+    rows.push((
+        format!("async: DVL ({dvl:.2} s)"),
+        make("dvl", dvl, &mut rng)?,
+    ));
+    rows.push((
+        format!("async: AHRS ({ahrs:.2} s)"),
+        make("ahrs", ahrs, &mut rng)?,
+    ));
+    for k in 1..=4 {
+        rows.push((
+            format!("async: range{k} ({range:.2} s)"),
+            make("range", range, &mut rng)?,
+        ));
+    }
+    rows.push((
+        format!("async: depth ({depth:.2} s)"),
+        make("depth", depth, &mut rng)?,
+    ));
+    Ok(Some(rows))
 }
 
 #[cfg(test)]
