@@ -1,6 +1,6 @@
 //! Fuzz harnesses of fathom: what each cargo-fuzz target in `fuzz_targets/` does with
 //! its input bytes, kept in plain functions so that the root e2e test
-//! (`tests/e2e/fuzz_corpus.rs`, which includes this file as a module) replays every
+//! (`crates/fathom-cli/tests/e2e/fuzz_corpus.rs`, which includes this file as a module) replays every
 //! committed corpus and regression file through exactly the same code without
 //! cargo-fuzz or libFuzzer.
 //!

@@ -2,7 +2,7 @@
 //! where the data comes from: [`SensorSource`] (the simulator: truth and the sensor
 //! epochs) and [`Navigator`] (the navigation: epochs in, solutions out).
 //!
-//! [`MapAidedRun`] implements both on the library pieces, as `tests/e2e/map_aided.rs`
+//! [`MapAidedRun`] implements both on the library pieces, as `crates/fathom-cli/tests/e2e/map_aided.rs`
 //! chains them: the quadrotor flies the `buildings` square (`fathom-traj`), the
 //! ADIS16448 IMU (`fathom-sensors`), a GPS fix with the line-of-sight count of nine
 //! fixed sky directions cast against the map, the paper's seven range finders or

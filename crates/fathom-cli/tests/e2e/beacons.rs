@@ -1,12 +1,12 @@
 //! End-to-end statistical test of the beacons EKF: NEES consistency on simulated
 //! data (seed 003 sensor suite), with a negative control that must fail.
 
-use fathom::estimators::schemes::UpdateScheme;
-use fathom::experiments::beacons::{EkfSettings, FilterSetup, run_scheme};
-use fathom::sensors::simulate_beacon_suite;
-use fathom::sim::montecarlo::run_rng;
-use fathom::stats::ChiSquareBounds;
-use fathom::traj::velocity_command::VelocityCommandMotion;
+use fathom_estimators::schemes::UpdateScheme;
+use fathom_experiments::beacons::{EkfSettings, FilterSetup, run_scheme};
+use fathom_sensors::simulate_beacon_suite;
+use fathom_sim::montecarlo::run_rng;
+use fathom_stats::ChiSquareBounds;
+use fathom_traj::velocity_command::VelocityCommandMotion;
 
 /// Monte Carlo runs.
 const RUNS: usize = 50;

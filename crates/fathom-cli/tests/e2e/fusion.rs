@@ -3,15 +3,13 @@
 //! INS drifts far more than the DVL dead reckoning, and EFF's feedback keeps the INS
 //! integrator's error bounded.
 
-use fathom::experiments::fusion::{RunResult, run_once, scenario::FusionScenario, sim::Method};
-use fathom::sim::montecarlo::try_run_monte_carlo;
-use fathom::sim::scenario::parse_toml;
+use fathom_experiments::fusion::{RunResult, run_once, scenario::FusionScenario, sim::Method};
+use fathom_sim::montecarlo::try_run_monte_carlo;
+use fathom_sim::scenario::parse_toml;
 
 fn reduced_scenario() -> FusionScenario {
-    let text = std::fs::read_to_string(
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/fusion.toml"),
-    )
-    .unwrap();
+    let text =
+        std::fs::read_to_string(crate::support::repo_root().join("scenarios/fusion.toml")).unwrap();
     let mut s: FusionScenario = parse_toml(&text, "scenarios/fusion.toml").unwrap();
     s.runs = 4;
     s.mission.duration_s = 520.0;

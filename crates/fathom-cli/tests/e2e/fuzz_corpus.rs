@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use crate::support::compare_snapshot;
 
 #[allow(dead_code)]
-#[path = "../../fuzz/src/lib.rs"]
+#[path = "../../../../fuzz/src/lib.rs"]
 mod harness;
 
 type Harness = fn(&[u8]) -> Vec<String>;

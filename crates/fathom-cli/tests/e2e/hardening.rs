@@ -4,11 +4,11 @@
 //! filter, never applied, and every estimate stays finite; a filter error surfaces
 //! as an error naming the scheme and the time, not a panic or NaN.
 
-use fathom::estimators::schemes::UpdateScheme;
-use fathom::experiments::beacons::{EkfSettings, FilterSetup, SchemeRun, run_scheme};
-use fathom::sensors::{BeaconSuiteData, simulate_beacon_suite};
-use fathom::sim::montecarlo::run_rng;
-use fathom::traj::velocity_command::VelocityCommandMotion;
+use fathom_estimators::schemes::UpdateScheme;
+use fathom_experiments::beacons::{EkfSettings, FilterSetup, SchemeRun, run_scheme};
+use fathom_sensors::{BeaconSuiteData, simulate_beacon_suite};
+use fathom_sim::montecarlo::run_rng;
+use fathom_traj::velocity_command::VelocityCommandMotion;
 use nalgebra::{Vector3, Vector4};
 
 /// Run length, s.
@@ -130,7 +130,7 @@ fn covariance_overflow_is_an_error_with_scheme_and_time() {
     }
     for scheme in UpdateScheme::ALL {
         let e = run_scheme(&f.motion, &absurd, &f.setup, scheme, &f.initial_error).unwrap_err();
-        let chain = fathom::sim::error_chain(&e);
+        let chain = fathom_sim::error_chain(&e);
         assert!(chain.contains(scheme.short_name()), "{chain}");
         assert!(chain.contains("covariance"), "{chain}");
         assert!(chain.contains(" at t = 1"), "{chain}");

@@ -21,8 +21,8 @@
 //! Negative control: the same readings compared with figures 5 % (random walks) and
 //! 30 % (bias instabilities) off fail those bounds.
 
-use fathom::sensors::allan_imu::AllanImuParams;
-use fathom::stats::allan::{
+use fathom_sensors::allan_imu::AllanImuParams;
+use fathom_stats::allan::{
     BIAS_INSTABILITY_FACTOR, bias_instability_at_minimum, bias_instability_plateau,
     log_spaced_cluster_sizes, overlapping_allan_variance, white_noise_coefficient,
 };

@@ -15,24 +15,24 @@
 //!   MGPMF's convergence rate over 50 runs, the GREKF's, and the particle filter's at
 //!   the same ray budget.
 
-use fathom::core::RayCaster;
-use fathom::estimators::map_aided::{
+use fathom_core::RayCaster;
+use fathom_estimators::map_aided::{
     BaroHeight, Correction, ErrorVector12, GpsFix, GpsParams, Grekf, Ins12Filter, Ins12Params,
     MapAider, Matrix12, Mgpmf, MgpmfParams, ModeSwitch, NavMode, NominalNav, ParticleFilter,
     ParticleParams, RangeBeam, RangeParams, SwitchParams, SwitchingFilter,
 };
-use fathom::ins::ImuIncrement;
-use fathom::ins::local_level::{
+use fathom_ins::ImuIncrement;
+use fathom_ins::local_level::{
     LocalLevelMechanization, LocalLevelState, LocalTruthSample, local_imu_from_truth,
-};
-use fathom::sensors::inertial::{ImuErrorSpec, ImuErrors};
-use fathom::stats::consistency::ChiSquareBounds;
-use fathom::traj::Trajectory;
-use fathom::traj::quadrotor::{
-    FlightParams, PathParams, QuadrotorParams, Waypoint, WindParams, fly_on_truth,
 };
 use fathom_map::primitives::ground_plane;
 use fathom_map::{BvhCaster, MeshBuilder, presets};
+use fathom_sensors::inertial::{ImuErrorSpec, ImuErrors};
+use fathom_stats::consistency::ChiSquareBounds;
+use fathom_traj::Trajectory;
+use fathom_traj::quadrotor::{
+    FlightParams, PathParams, QuadrotorParams, Waypoint, WindParams, fly_on_truth,
+};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -403,7 +403,7 @@ fn consistent_imu() -> ImuErrorSpec {
         gyro_bias_tau: 1.0,
         gyro_arw: n.angle_random_walk_rad_per_sqrt_s,
         gyro_scale_factor: 0.0,
-        accel_bias: 1e-3 * fathom::core::units::STANDARD_GRAVITY,
+        accel_bias: 1e-3 * fathom_core::units::STANDARD_GRAVITY,
         accel_bias_instability: 0.0,
         accel_bias_tau: 1.0,
         accel_vrw: n.velocity_random_walk_mps_per_sqrt_s,
@@ -422,7 +422,7 @@ fn corridor_map() -> BvhCaster {
         [-50.0, 200.0],
         [-50.0, 50.0],
         0.0,
-        fathom::core::Material::Opaque,
+        fathom_core::Material::Opaque,
     )
     .unwrap();
     for e in [-5.0, 5.0] {
@@ -433,7 +433,7 @@ fn corridor_map() -> BvhCaster {
                 Vector3::new(150.0, e, -15.0),
                 Vector3::new(-30.0, e, -15.0),
             ],
-            fathom::core::Material::Opaque,
+            fathom_core::Material::Opaque,
         );
     }
     BvhCaster::new(&b.build().unwrap().0)
@@ -448,10 +448,10 @@ fn corner_map() -> BvhCaster {
         [-60.0, 20.0],
         [-60.0, 20.0],
         0.0,
-        fathom::core::Material::Opaque,
+        fathom_core::Material::Opaque,
     )
     .unwrap();
-    let m = fathom::core::Material::Opaque;
+    let m = fathom_core::Material::Opaque;
     b.quad_at(
         [
             Vector3::new(0.0, -40.0, 0.0),
@@ -629,7 +629,7 @@ fn corridor_nees(chain: &Chain, kind: Kind, q_scale: f64) -> (Vec<f64>, ChiSquar
             0.5,
             0.1,
             0.5f64.to_radians(),
-            1e-3 * fathom::core::units::STANDARD_GRAVITY,
+            1e-3 * fathom_core::units::STANDARD_GRAVITY,
         ]),
         initial_error: None,
         noise,
@@ -753,7 +753,7 @@ fn mgpmf_converges_from_5_m_off_in_a_corner() {
             }
         }
         let ci = wilson(converged, runs as usize);
-        let m = fathom::stats::monte_carlo::mean_ci(&finals).unwrap();
+        let m = fathom_stats::monte_carlo::mean_ci(&finals).unwrap();
         let ci_m = m.ci95.unwrap_or([m.mean, m.mean]);
         eprintln!(
             "corner, 5 m off, {kind:?}: converged (< 1 m at 5 s) in {converged}/{runs} runs \

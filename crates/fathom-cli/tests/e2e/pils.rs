@@ -439,7 +439,7 @@ fn bad_settings_and_foreign_output_folder_are_refused_before_the_run() {
 #[test]
 fn full_buildings_flight_lockstep_equals_offline_quantized_run() {
     let dir = scratch("pils-full");
-    let file = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/pils.toml");
+    let file = crate::support::repo_root().join("scenarios/pils.toml");
     let file = file.to_str().unwrap();
     let r = fathom(&dir, &["pils", file, "--out", "out"]);
     assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);

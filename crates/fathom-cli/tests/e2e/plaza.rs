@@ -6,9 +6,9 @@
 
 use std::path::{Path, PathBuf};
 
-use fathom::data::matv5::{NamedMatrix, write_mat_v5};
-use fathom::data::plaza::{PlazaFiles, PlazaLog, read_mat};
-use fathom::replay::plaza::{PlazaReplay, parse_settings, replay};
+use fathom_data::matv5::{NamedMatrix, write_mat_v5};
+use fathom_data::plaza::{PlazaFiles, PlazaLog, read_mat};
+use fathom_replay::plaza::{PlazaReplay, parse_settings, replay};
 
 use crate::support::{preset, repo_root, run_experiment, scratch, write_scenario};
 
@@ -71,7 +71,7 @@ fn make_copy(src: &Path, dst: &Path, edit: Edit) {
     };
     copy_text(&files.odometry, "Copy_DR.txt", None);
     copy_text(&files.ranges, "Copy_TD.txt", Some(2));
-    let poses = |p: &[fathom::data::plaza::PoseRecord]| -> Vec<Vec<f64>> {
+    let poses = |p: &[fathom_data::plaza::PoseRecord]| -> Vec<Vec<f64>> {
         p.iter()
             .filter(|r| r.time < end)
             .map(|r| vec![r.time + edit.shift, r.x, r.y, r.heading])

@@ -9,13 +9,13 @@
 //! - The ADIS16448 at rest during the flight's stationary start: the gyro bias
 //!   estimated by averaging matches the true bias within the white-noise bound.
 
-use fathom::ins::ImuIncrement;
-use fathom::ins::local_level::{
+use fathom_ins::ImuIncrement;
+use fathom_ins::local_level::{
     LocalLevelMechanization, LocalTruthSample, local_imu_from_truth, stationary_gyro_bias,
 };
-use fathom::sensors::allan_imu::AllanImuParams;
-use fathom::traj::Trajectory;
-use fathom::traj::quadrotor::{
+use fathom_sensors::allan_imu::AllanImuParams;
+use fathom_traj::Trajectory;
+use fathom_traj::quadrotor::{
     FlownTrajectory, PathParams, QuadrotorParams, WindParams, fly_on_truth,
 };
 use nalgebra::Vector3;

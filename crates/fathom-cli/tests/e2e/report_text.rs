@@ -2,7 +2,7 @@
 //! reads the run's own rows, and checks that a sentence of `report.md` that used to
 //! be fixed text now follows the numbers.
 
-use fathom::report::output::Summary;
+use fathom_report::output::Summary;
 
 use crate::support::{preset, run_experiment, scratch, write_scenario};
 

@@ -4,8 +4,8 @@
 //! reduced `beacons` and `vkf` scenarios the smoothed rows with CIs are added and every
 //! filtered row stays as it was.
 
-use fathom::experiments::plaza::{GTSAM_BATCH_M, MAIN_METHODS, SMOOTHED_TARGET_M, smoothed_name};
-use fathom::replay::plaza::{PlazaReplay, parse_settings, replay};
+use fathom_experiments::plaza::{GTSAM_BATCH_M, MAIN_METHODS, SMOOTHED_TARGET_M, smoothed_name};
+use fathom_replay::plaza::{PlazaReplay, parse_settings, replay};
 
 use crate::support::{preset, repo_root, run_experiment, scratch, write_scenario};
 
@@ -27,7 +27,7 @@ fn plaza_scenario(smooth: bool) -> String {
 
 fn replay_with(text: &str) -> PlazaReplay {
     let settings = parse_settings(text, "plaza.toml").unwrap();
-    let log = fathom::data::plaza::PlazaLog::read_dir(
+    let log = fathom_data::plaza::PlazaLog::read_dir(
         std::path::Path::new(&settings.data_dir),
         settings.range_order,
     )
@@ -122,7 +122,7 @@ fn with_smooth(text: &str) -> String {
 }
 
 /// Runs experiment `name` from `text` in a scratch workspace; returns the summary.
-fn run_summary(tag: &str, name: &str, text: &str) -> fathom::report::output::Summary {
+fn run_summary(tag: &str, name: &str, text: &str) -> fathom_report::output::Summary {
     let root = scratch(tag);
     write_scenario(&root, &format!("{name}.toml"), text);
     let result = run_experiment(&root, name, Some(2)).unwrap();
@@ -131,8 +131,8 @@ fn run_summary(tag: &str, name: &str, text: &str) -> fathom::report::output::Sum
 
 /// Every row of `off` is in `on` unchanged (smoothing only adds rows).
 fn filtered_rows_unchanged(
-    off: &fathom::report::output::Summary,
-    on: &fathom::report::output::Summary,
+    off: &fathom_report::output::Summary,
+    on: &fathom_report::output::Summary,
 ) {
     for row in &off.rows {
         assert_eq!(on.row(&row.method, &row.metric), Some(row), "{row:?}");

@@ -4,14 +4,13 @@
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
-use std::sync::OnceLock;
 
-use fathom::sim::driver::run_paper_to;
-use fathom::sim::{PaperOptions, PaperResult, SimError};
+use fathom_sim::driver::run_paper_to;
+use fathom_sim::{PaperOptions, PaperResult, SimError};
 
 /// The repository root (where `scenarios/` lives).
 pub fn repo_root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
 /// Reads a preset scenario file from `scenarios/`.
@@ -49,12 +48,12 @@ pub fn run_experiment(
         force: false,
     };
     let mut sink = Vec::new();
-    run_paper_to(&options, &fathom::experiments::registry(), &mut sink)
+    run_paper_to(&options, &fathom_experiments::registry(), &mut sink)
 }
 
 /// Every row of the experiment has a declared unit (the console and `report.md`
 /// show it; `-` would mean a forgotten declaration).
-pub fn assert_every_row_has_a_unit(e: &fathom::sim::driver::ExperimentResult) {
+pub fn assert_every_row_has_a_unit(e: &fathom_sim::driver::ExperimentResult) {
     for r in &e.summary.rows {
         assert!(
             e.units.contains_key(&r.metric),
@@ -68,62 +67,16 @@ pub fn assert_every_row_has_a_unit(e: &fathom::sim::driver::ExperimentResult) {
 
 /// The full error chain as one string (what `cargo xtask paper` prints).
 pub fn chain(e: &SimError) -> String {
-    fathom::sim::error_chain(e)
+    fathom_sim::error_chain(e)
 }
 
-/// The `fathom` binary, built once per test process with this test binary's profile
-/// (`cargo build --profile test --workspace --bins --tests`, or `--release` under
-/// `cargo test --release`), so the tests always run the binary of the current sources.
-/// Building the workspace's test targets too makes cargo resolve the same features as
-/// `cargo test --workspace` (dev-dependencies included): every library is then already
-/// compiled and only the binaries are linked (seconds), where `-p fathom-cli` alone
-/// would recompile ~30 dependencies with other features. `FATHOM_BIN` overrides it
+/// The `fathom` binary cargo built for this test run (`CARGO_BIN_EXE_fathom`: the
+/// binary of the current sources, with this test's profile); `FATHOM_BIN` overrides it
 /// (an installed binary).
 pub fn fathom_bin() -> PathBuf {
-    static BIN: OnceLock<PathBuf> = OnceLock::new();
-    BIN.get_or_init(|| {
-        if let Some(path) = std::env::var_os("FATHOM_BIN") {
-            return PathBuf::from(path);
-        }
-        let exe = std::env::current_exe().unwrap();
-        // target/<profile dir>/deps/e2e-<hash>
-        let release = exe
-            .parent()
-            .and_then(Path::parent)
-            .and_then(Path::file_name)
-            .is_some_and(|n| n == "release");
-        let mut cmd = Command::new(env!("CARGO"));
-        cmd.args([
-            "build",
-            "--workspace",
-            "--bins",
-            "--tests",
-            "--message-format=json-render-diagnostics",
-        ]);
-        if release {
-            cmd.arg("--release");
-        } else {
-            cmd.args(["--profile", "test"]);
-        }
-        let out = cmd.current_dir(repo_root()).output().unwrap();
-        assert!(
-            out.status.success(),
-            "building the fathom binary failed:\n{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        String::from_utf8_lossy(&out.stdout)
-            .lines()
-            .filter_map(|l| serde_json::from_str::<serde_json::Value>(l).ok())
-            .filter(|m| {
-                m["reason"] == "compiler-artifact"
-                    && m["target"]["name"] == "fathom"
-                    && m["target"]["kind"][0] == "bin"
-                    && m["profile"]["test"] == false
-            })
-            .find_map(|m| m["executable"].as_str().map(PathBuf::from))
-            .expect("cargo reported the fathom executable")
-    })
-    .clone()
+    std::env::var_os("FATHOM_BIN")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_fathom")))
 }
 
 /// What one `fathom` invocation did.
@@ -181,15 +134,15 @@ pub fn beacon_mission(
     correlation: bool,
     outliers: bool,
 ) -> (
-    fathom::traj::velocity_command::VelocityCommandParams,
-    fathom::sensors::BeaconSuiteConfig,
+    fathom_traj::velocity_command::VelocityCommandParams,
+    fathom_sensors::BeaconSuiteConfig,
 ) {
-    let motion_params = fathom::traj::velocity_command::VelocityCommandParams {
+    let motion_params = fathom_traj::velocity_command::VelocityCommandParams {
         duration: duration_s,
         ..Default::default()
     };
-    let suite = fathom::sensors::BeaconSuiteParams {
-        switches: fathom::sensors::NoiseSwitches {
+    let suite = fathom_sensors::BeaconSuiteParams {
+        switches: fathom_sensors::NoiseSwitches {
             gaussian: true,
             correlation,
             outliers,

@@ -9,7 +9,7 @@ use fathom_sim::PaperOptions;
 use fathom_sim::driver::run_paper_to;
 
 pub(crate) fn short_scenario() -> String {
-    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let root = &crate::support::repo_root();
     let text = std::fs::read_to_string(root.join("scenarios/vkf.toml")).unwrap();
     let mut out = String::new();
     let mut skip = false;
