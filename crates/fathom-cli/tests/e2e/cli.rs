@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use fathom_experiments::registry;
 use fathom_sim::user_run::{EXIT_USAGE, check_command};
 
-use crate::support::compare_snapshot;
+use crate::support::{compare_snapshot, repo_root};
 
 fn corpus() -> Vec<PathBuf> {
     let dir = Path::new("tests/cli_corpus");
@@ -56,7 +56,7 @@ fn toml_errors_name_the_line() {
 fn presets_check_ok() {
     let reg = registry();
     for exp in &reg {
-        let (code, line) = check_command(Path::new(exp.default_scenario()), &reg);
+        let (code, line) = check_command(&repo_root().join(exp.default_scenario()), &reg);
         assert_eq!(code, 0, "{line}");
         assert!(
             line.starts_with("OK ") && line.contains(exp.name()),

@@ -9,7 +9,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::support::compare_snapshot;
+use crate::support::{compare_snapshot, repo_root};
 
 #[allow(dead_code)]
 #[path = "../../../../fuzz/src/lib.rs"]
@@ -48,7 +48,7 @@ fn inputs(dir: &Path) -> Vec<PathBuf> {
 fn every_corpus_file_runs_through_its_harness_without_panic() {
     let mut total = 0;
     for (target, run) in TARGETS {
-        let files = inputs(&Path::new("fuzz/corpus").join(target));
+        let files = inputs(&repo_root().join("fuzz/corpus").join(target));
         assert!(!files.is_empty(), "no corpus for fuzz target `{target}`");
         for f in &files {
             let outcome = run(&std::fs::read(f).unwrap());
@@ -64,7 +64,7 @@ fn every_fuzz_regression_gives_its_expected_error() {
     let mut mismatches = Vec::new();
     let mut total = 0;
     for (target, run) in TARGETS {
-        for f in inputs(&Path::new("fuzz/regressions").join(target)) {
+        for f in inputs(&repo_root().join("fuzz/regressions").join(target)) {
             total += 1;
             let got = run(&std::fs::read(&f).unwrap()).join("\n");
             let snapshot = PathBuf::from(format!("{}.expected", f.display()));
@@ -90,13 +90,13 @@ fn seed_inputs_are_valid() {
         "seed_real_layout_compressed",
         "seed_real_tl_element",
     ] {
-        let bytes = std::fs::read(Path::new("fuzz/corpus/plaza_mat").join(seed)).unwrap();
+        let bytes = std::fs::read(repo_root().join("fuzz/corpus/plaza_mat").join(seed)).unwrap();
         let outcome = harness::plaza_mat(&bytes);
         assert!(outcome[0].starts_with("ok"), "{seed}: {outcome:?}");
     }
-    let dr = std::fs::read(Path::new("fuzz/corpus/plaza_text/seed_dr_head")).unwrap();
+    let dr = std::fs::read(repo_root().join("fuzz/corpus/plaza_text/seed_dr_head")).unwrap();
     assert!(harness::plaza_text(&dr)[0].starts_with("odometry: ok"));
-    let td = std::fs::read(Path::new("fuzz/corpus/plaza_text/seed_td_backwards")).unwrap();
+    let td = std::fs::read(repo_root().join("fuzz/corpus/plaza_text/seed_td_backwards")).unwrap();
     assert_eq!(
         harness::plaza_text(&td)[2],
         "ranges sort: ok, 4 ranges, 1 order breaks"
@@ -106,7 +106,7 @@ fn seed_inputs_are_valid() {
         ("map_stl", "seed_wedge_binary.stl"),
         ("map_stl", "seed_wedge_ascii.stl"),
     ] {
-        let bytes = std::fs::read(Path::new("fuzz/corpus").join(target).join(seed)).unwrap();
+        let bytes = std::fs::read(repo_root().join("fuzz/corpus").join(target).join(seed)).unwrap();
         let run = if target == "map_obj" {
             harness::map_obj
         } else {
