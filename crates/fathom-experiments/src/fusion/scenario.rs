@@ -321,13 +321,6 @@ impl FusionScenario {
     /// [`SimError::Invalid`] naming the file and key.
     pub fn check(&self, file: &str) -> Result<FusionSetup, SimError> {
         let runs = self.runs;
-        if runs < 2 {
-            return Err(SimError::invalid(
-                file,
-                "runs",
-                format!("needs at least 2 Monte Carlo runs for a confidence interval, got {runs}"),
-            ));
-        }
         let m = &self.mission;
         require_positive(file, "mission.duration_s", m.duration_s)?;
         require_positive(file, "mission.step_s", m.step_s)?;

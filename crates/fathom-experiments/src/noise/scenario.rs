@@ -151,13 +151,6 @@ impl NoiseScenario {
     /// [`SimError::Invalid`] naming the key.
     pub fn check(&self, file: &str) -> Result<Checked, SimError> {
         let runs = self.runs;
-        if runs < 2 {
-            return Err(SimError::invalid(
-                file,
-                "runs",
-                format!("needs at least 2 Monte Carlo runs for a confidence interval, got {runs}"),
-            ));
-        }
         let motion = self.motion.to_params(file, "motion")?;
         let beacons = self.beacons.to_positions(file, "beacons")?;
         if beacons.len() != 4 {

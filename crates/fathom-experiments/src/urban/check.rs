@@ -311,16 +311,6 @@ impl UrbanScenario {
     /// [`SimError::Invalid`] naming the key.
     pub fn check(&self, file: &str) -> Result<Checked, SimError> {
         require_experiment(file, &self.experiment, "urban")?;
-        if self.runs < 2 {
-            return Err(SimError::invalid(
-                file,
-                "runs",
-                format!(
-                    "needs at least 2 runs for confidence intervals, got {}",
-                    self.runs
-                ),
-            ));
-        }
         let v = &self.vehicle;
         let rest_s = require_in_range(file, "vehicle.rest_s", v.rest_s, 1.0, 3600.0)?;
         let cruise = require_positive(file, "vehicle.cruise_speed_mps", v.cruise_speed_mps)?;

@@ -510,13 +510,6 @@ impl VkfScenario {
     /// [`SimError::Invalid`] naming the key.
     pub fn check(&self, file: &str) -> Result<Checked, SimError> {
         let runs = self.runs;
-        if runs < 2 {
-            return Err(SimError::invalid(
-                file,
-                "runs",
-                format!("needs at least 2 runs for a confidence interval, got {runs}"),
-            ));
-        }
         let literal_bias_runs = match self.literal_bias_runs {
             0 => 0,
             1 => {

@@ -379,13 +379,27 @@ fn read_checked<E: Experiment>(
     {
         return Err(SimError::invalid(file, "base_seed", seed_too_large(s)));
     }
-    let checked = exp.check(&scenario, file).map_err(|e| match e {
-        // A run count the user gave with --runs is reported as the option's.
-        SimError::Invalid {
-            key_path, reason, ..
-        } if runs.is_some() && key_path == "runs" => SimError::invalid_argument("--runs", reason),
-        other => other,
-    })?;
+    // A Monte Carlo experiment's main batch needs two runs for an interval: checked
+    // here once for every experiment.
+    let main_runs = match scenario.runs() {
+        Some(n) if n < 2 => Err(SimError::invalid(
+            file,
+            "runs",
+            format!("needs at least 2 Monte Carlo runs for a confidence interval, got {n}"),
+        )),
+        _ => Ok(()),
+    };
+    let checked = main_runs
+        .and_then(|()| exp.check(&scenario, file))
+        .map_err(|e| match e {
+            // A run count the user gave with --runs is reported as the option's.
+            SimError::Invalid {
+                key_path, reason, ..
+            } if runs.is_some() && key_path == "runs" => {
+                SimError::invalid_argument("--runs", reason)
+            }
+            other => other,
+        })?;
     let resolved = Resolved {
         toml: to_toml(&scenario, file)?,
         runs: scenario.runs(),
@@ -600,15 +614,43 @@ impl<E: Experiment> DynExperiment for E {
     }
 }
 
-impl<E: Experiment> Runnable for Typed<'_, E> {
-    fn execute(self: Box<Self>) -> Result<Executed, SimError> {
+/// A typed job prepared: what its runs share and its batches.
+struct Ready<'j, E: Experiment> {
+    exp: E,
+    job: &'j Job<'j>,
+    resolved: Resolved,
+    prepared: E::Prepared,
+    batches: Vec<Batch>,
+}
+
+impl<'j, E: Experiment> Typed<'j, E> {
+    fn ready(self) -> Result<Ready<'j, E>, SimError> {
         let Typed {
             exp,
             job,
             checked,
             resolved,
-        } = *self;
+        } = self;
         let (prepared, batches) = prepare_with(&exp, job, checked)?;
+        Ok(Ready {
+            exp,
+            job,
+            resolved,
+            prepared,
+            batches,
+        })
+    }
+}
+
+impl<E: Experiment> Runnable for Typed<'_, E> {
+    fn execute(self: Box<Self>) -> Result<Executed, SimError> {
+        let Ready {
+            exp,
+            job,
+            resolved,
+            prepared,
+            batches,
+        } = (*self).ready()?;
         let seed = resolved.base_seed.unwrap_or(0);
         let mut kept = Vec::with_capacity(batches.len());
         let mut folds = Vec::with_capacity(batches.len());
@@ -635,13 +677,9 @@ impl<E: Experiment> Runnable for Typed<'_, E> {
     }
 
     fn plan(self: Box<Self>) -> Result<Plan, SimError> {
-        let Typed {
-            exp,
-            job,
-            checked,
-            resolved,
-        } = *self;
-        let (_, batches) = prepare_with(&exp, job, checked)?;
+        let Ready {
+            resolved, batches, ..
+        } = (*self).ready()?;
         Ok(Plan { resolved, batches })
     }
 
@@ -650,13 +688,13 @@ impl<E: Experiment> Runnable for Typed<'_, E> {
         shard: Shard,
         sink: &mut dyn RecordSink,
     ) -> Result<Plan, SimError> {
-        let Typed {
+        let Ready {
             exp,
             job,
-            checked,
             resolved,
-        } = *self;
-        let (prepared, batches) = prepare_with(&exp, job, checked)?;
+            prepared,
+            batches,
+        } = (*self).ready()?;
         let seed = resolved.base_seed.unwrap_or(0);
         for (b, batch) in batches.iter().enumerate() {
             let range = shard.range(batch.runs);
@@ -673,13 +711,13 @@ impl<E: Experiment> Runnable for Typed<'_, E> {
     }
 
     fn execute_from(self: Box<Self>, source: &mut dyn RecordSource) -> Result<Executed, SimError> {
-        let Typed {
+        let Ready {
             exp,
-            job,
-            checked,
             resolved,
-        } = *self;
-        let (prepared, batches) = prepare_with(&exp, job, checked)?;
+            prepared,
+            batches,
+            ..
+        } = (*self).ready()?;
         let mut kept = Vec::with_capacity(batches.len());
         let mut folds = Vec::with_capacity(batches.len());
         for (b, batch) in batches.iter().enumerate() {
