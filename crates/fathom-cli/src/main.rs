@@ -66,7 +66,8 @@
 mod campaign;
 mod own_logs;
 mod pils;
-mod pils_figures;
+mod pils_compare;
+mod pils_session;
 
 use std::io::{IsTerminal, Write as _};
 use std::path::{Path, PathBuf};

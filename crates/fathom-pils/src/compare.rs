@@ -4,11 +4,13 @@
 //! intervals over the runs (`fathom_stats::paired_mean_ci`: the two pacings of a run
 //! share its flight, sensors and initial error, so the pairs remove that spread).
 
+use fathom_report::output::{Row, Summary, csv_string};
 use fathom_stats::{MeanCi, mean_ci, paired_mean_ci};
 use serde::Serialize;
 
 use crate::PilsError;
-use crate::report::ErrorStats;
+use crate::report::{ErrorStats, SEED_DOC};
+use crate::settings::Settings;
 
 /// One run flown both ways.
 #[derive(Debug, Clone, Serialize)]
@@ -99,39 +101,91 @@ impl Comparison {
         })
     }
 
-    /// The per-run table as CSV.
-    pub fn runs_csv(&self) -> String {
-        let mut s = String::from(
-            "run,steps,realtime_solutions,realtime_answers,realtime_late,latency_p50_ms,\
-             latency_p95_ms,lockstep_equal_offline",
-        );
+    /// The per-run table as CSV (fathom-report's CSV writer).
+    ///
+    /// # Errors
+    /// [`PilsError::Model`] if the CSV cannot be formatted (it is written in memory).
+    pub fn runs_csv(&self) -> Result<String, PilsError> {
         let names = self.runs[0].lockstep.metrics().map(|(n, _)| n);
+        let mut header: Vec<String> = [
+            "run",
+            "steps",
+            "realtime_solutions",
+            "realtime_answers",
+            "realtime_late",
+            "latency_p50_ms",
+            "latency_p95_ms",
+            "lockstep_equal_offline",
+        ]
+        .map(String::from)
+        .to_vec();
         for p in ["lockstep", "realtime"] {
-            for n in names {
-                s += &format!(",{p}_{n}");
-            }
+            header.extend(names.iter().map(|n| format!("{p}_{n}")));
         }
-        s.push('\n');
-        for r in &self.runs {
-            s += &format!(
-                "{},{},{},{},{},{},{},{}",
-                r.run,
-                r.steps,
-                r.realtime_solutions,
-                r.realtime_answers,
-                r.realtime_late,
-                r.realtime_latency_ms[0],
-                r.realtime_latency_ms[1],
-                r.lockstep_equal_offline
-            );
-            for st in [&r.lockstep, &r.realtime] {
-                for (_, v) in st.metrics() {
-                    s += &format!(",{v}");
+        csv_string(|w| {
+            w.record(&header)?;
+            for r in &self.runs {
+                w.display(r.run)?;
+                w.display(r.steps)?;
+                w.display(r.realtime_solutions)?;
+                w.display(r.realtime_answers)?;
+                w.display(r.realtime_late)?;
+                w.float(r.realtime_latency_ms[0])?;
+                w.float(r.realtime_latency_ms[1])?;
+                w.display(r.lockstep_equal_offline)?;
+                for st in [&r.lockstep, &r.realtime] {
+                    for (_, v) in st.metrics() {
+                        w.float(v)?;
+                    }
                 }
+                w.end_record()?;
             }
-            s.push('\n');
+            Ok(())
+        })
+        .map_err(|e| PilsError::model("runs.csv", e))
+    }
+
+    /// The study's `summary.json` (the shared contract): `runs` pairs from the
+    /// settings' `seed`, rows `lockstep/<method>`, `realtime/<method>` and
+    /// `realtime-lockstep/<method>` (the paired difference) per metric, with their
+    /// 95 % intervals.
+    pub fn summary(&self, method: &str, seed: u64) -> Summary {
+        let mut summary = Summary::new("pils", SEED_DOC, self.runs.len(), seed);
+        for mc in &self.metrics {
+            for (label, v) in [
+                ("lockstep", &mc.lockstep),
+                ("realtime", &mc.realtime),
+                ("realtime-lockstep", &mc.difference),
+            ] {
+                let [lo, hi] = v.bounds();
+                summary.push_row(
+                    Row::new(format!("{label}/{method}"), mc.metric, v.mean).with_ci95(lo, hi),
+                );
+            }
         }
-        s
+        summary
+    }
+
+    /// The study's text files (name, content): `runs.csv` ([`Comparison::runs_csv`]),
+    /// `report.md` ([`Comparison::markdown`] under [`title`]), `comparison.json`
+    /// (everything) and `summary.json` ([`Comparison::summary`]). The figures are
+    /// `crate::figures::study_figures`; the caller writes both.
+    ///
+    /// # Errors
+    /// [`PilsError::Model`] if a file cannot be formatted.
+    pub fn files(&self, s: &Settings) -> Result<Vec<(&'static str, String)>, PilsError> {
+        let json = serde_json::to_string_pretty(self)
+            .map_err(|e| PilsError::model("comparison.json", e))?;
+        let summary = self
+            .summary(s.method.name(), s.file.seed)
+            .to_json_pretty()
+            .map_err(|e| PilsError::model("summary.json", e))?;
+        Ok(vec![
+            ("runs.csv", self.runs_csv()?),
+            ("report.md", self.markdown(&title(s))),
+            ("comparison.json", json),
+            ("summary.json", summary),
+        ])
     }
 
     /// The report: per-run table and per-metric intervals, Markdown.
@@ -182,6 +236,18 @@ impl Comparison {
         );
         s
     }
+}
+
+/// The study's title: the method and the realtime link's faults.
+pub fn title(s: &Settings) -> String {
+    let f = &s.file.link.faults;
+    format!(
+        "PILS {}: realtime (loss {:.0} %, latency {:.0} +- {:.0} ms) vs lockstep",
+        s.method.name(),
+        100.0 * f.loss,
+        1e3 * f.latency_s,
+        1e3 * f.jitter_s
+    )
 }
 
 /// The unit of a metric of [`ErrorStats::metrics`].
@@ -250,7 +316,14 @@ mod tests {
         assert!((c.solution_fraction - 0.9).abs() < 1e-12);
         let md = c.markdown("t");
         assert!(md.contains("| rmse_3d (m) | 2.000 ["), "{md}");
-        assert_eq!(c.runs_csv().lines().count(), 4);
+        let csv = c.runs_csv().unwrap();
+        assert_eq!(csv.lines().count(), 4);
+        assert!(csv.starts_with("run,steps,realtime_solutions,"), "{csv}");
+        assert!(csv.contains("\n1,100,90,90,9,20,40,true,"), "{csv}");
+        let s = c.summary("MGPMF", 5);
+        assert_eq!((s.runs, s.base_seed), (3, 5));
+        let d = s.row("realtime-lockstep/MGPMF", "rmse_3d").unwrap();
+        assert!((d.value - 0.2).abs() < 1e-12 && d.ci95.is_some());
     }
 
     #[test]

@@ -16,14 +16,16 @@
 //! | [`settings`] | the `[pils]` settings (pacing, timeout, faults, signing) |
 //! | [`scenario`] | the flight, sensors and navigation a PILS run uses |
 //! | [`sim`], [`nav`] | the two processes' loops |
-//! | [`report`] | the outputs |
-//! | [`compare`] | lockstep vs realtime over runs: paired differences with CIs |
+//! | [`report`] | evaluation, offline references, a session's output files (`summary.json` in the shared contract) |
+//! | [`compare`] | lockstep vs realtime over runs: paired differences with CIs, the study's files |
+//! | [`figures`] | a session's and the study's figures as SVG text |
 
 pub mod assemble;
 pub mod codec;
 pub mod compare;
 pub mod epoch;
 pub mod faults;
+pub mod figures;
 pub mod frame;
 pub mod link;
 pub mod nav;

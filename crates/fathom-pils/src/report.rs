@@ -5,6 +5,7 @@ use std::collections::BTreeMap;
 
 use fathom_core::frames::euler_from_nav_from_body;
 use fathom_core::units::wrap_pi;
+use fathom_report::output::{CsvWriter, Row, Summary, csv_string};
 use serde::Serialize;
 
 use crate::PilsError;
@@ -185,83 +186,225 @@ pub struct SimReport {
     pub equal_to_offline_quantized: Option<bool>,
 }
 
-/// `summary.json` rows in the project's shape (`method`, `metric`, `value`).
-#[derive(Debug, Clone, Serialize)]
-pub struct Row {
-    /// `pils/<method>`, `offline/<method>`, ...
-    pub method: String,
-    /// Metric name.
-    pub metric: String,
-    /// Paper value (none for PILS).
-    pub paper: Option<f64>,
-    /// Measured value.
-    pub value: f64,
-    /// No Monte Carlo interval for one run.
-    pub ci95: Option<[f64; 2]>,
-}
+/// The seed paper of the map-aided flight that PILS flies (`summary.json`'s
+/// `seed_doc`).
+pub const SEED_DOC: &str = "004_a46751abbc309235.txt";
 
-/// The simulator's output files (name, content): `summary.json` (rows in the
-/// shape `fathom run` writes), `pils.json` (the whole report) and `solutions.csv`
-/// (the decoded solutions). The caller writes them (no file I/O in this crate).
-pub fn sim_files(r: &SimReport, sols: &BTreeMap<u64, Solution>) -> Vec<(&'static str, String)> {
-    let mut rows = Vec::new();
+/// The simulator's `summary.json`: the shared contract ([`Summary`], read back by
+/// `fathom_report::output::read_summary_json`) of one run (`runs` 1, `base_seed` the
+/// settings' `seed`), rows `<pils|offline_quantized|offline>/<method>` x
+/// [`ErrorStats::metrics`] (no paper value, no interval for one run), no claims, and
+/// the extra keys `method`, `pacing`, `run` (the settings' run index), `status` and
+/// `equal_to_offline_quantized` (`null` when the references were not run). JSON has
+/// no NaN: a metric that is not finite (a diverged navigation) gets no row and is
+/// named in the extra key `non_finite` instead.
+pub fn sim_summary(r: &SimReport, seed: u64, run: u64) -> Summary {
+    let mut s = Summary::new("pils", SEED_DOC, 1, seed);
+    let mut non_finite = Vec::new();
     for (label, st) in [
         ("pils", &r.pils),
         ("offline_quantized", &r.offline_quantized),
         ("offline", &r.offline),
     ] {
-        if let Some(st) = st {
-            for (m, v) in st.metrics() {
-                rows.push(Row {
-                    method: format!("{label}/{}", r.method),
-                    metric: m.into(),
-                    paper: None,
-                    value: v,
-                    ci95: None,
-                });
+        for (m, v) in st.iter().flat_map(ErrorStats::metrics) {
+            let method = format!("{label}/{}", r.method);
+            if v.is_finite() {
+                s.push_row(Row::new(method, m, v));
+            } else {
+                non_finite.push(format!("{method} {m}"));
             }
         }
     }
-    let summary = serde_json::json!({
-        "experiment": "pils",
-        "seed_doc": "004_a46751abbc309235.txt",
-        "runs": 1,
-        "rows": rows,
-        "claims": [],
-    });
-    vec![
+    let extra = [
+        ("method", serde_json::json!(r.method)),
+        ("pacing", serde_json::json!(r.pacing)),
+        ("run", serde_json::json!(run)),
+        ("status", serde_json::json!(r.status)),
         (
-            "summary.json",
-            serde_json::to_string_pretty(&summary).unwrap_or_default(),
+            "equal_to_offline_quantized",
+            serde_json::json!(r.equal_to_offline_quantized),
         ),
+    ];
+    for (k, v) in extra {
+        s.extra.insert(k.into(), v);
+    }
+    if !non_finite.is_empty() {
+        s.extra
+            .insert("non_finite".into(), serde_json::json!(non_finite));
+    }
+    s
+}
+
+/// The simulator's output files (name, content): `summary.json` ([`sim_summary`]),
+/// `pils.json` (the whole report) and `solutions.csv` (the decoded solutions). The
+/// caller writes them (no file I/O in this crate).
+///
+/// # Errors
+/// [`PilsError::Model`] if the summary or the CSV cannot be formatted.
+pub fn sim_files(
+    r: &SimReport,
+    sols: &BTreeMap<u64, Solution>,
+    seed: u64,
+    run: u64,
+) -> Result<Vec<(&'static str, String)>, PilsError> {
+    let summary = sim_summary(r, seed, run)
+        .to_json_pretty()
+        .map_err(|e| PilsError::model("summary.json", e))?;
+    Ok(vec![
+        ("summary.json", summary),
         (
             "pils.json",
             serde_json::to_string_pretty(r).unwrap_or_default(),
         ),
-        ("solutions.csv", solutions_csv(sols)),
-    ]
+        ("solutions.csv", solutions_csv(sols)?),
+    ])
 }
 
-/// Solutions as CSV with round-trip `f64` text.
-pub fn solutions_csv(sols: &BTreeMap<u64, Solution>) -> String {
-    let mut s = String::from("step,time,n,e,d,vn,ve,vd,qw,qx,qy,qz,map_aided\n");
-    for (k, x) in sols {
-        let q = x.nav_from_body.quaternion();
-        s.push_str(&format!(
-            "{k},{},{},{},{},{},{},{},{},{},{},{},{}\n",
-            x.time,
-            x.pos_in_nav.x,
-            x.pos_in_nav.y,
-            x.pos_in_nav.z,
-            x.vel_in_nav.x,
-            x.vel_in_nav.y,
-            x.vel_in_nav.z,
-            q.w,
-            q.i,
-            q.j,
-            q.k,
-            u8::from(x.map_aided)
-        ));
+/// The header of `solutions.csv`.
+const SOLUTIONS_HEADER: [&str; 13] = [
+    "step",
+    "time",
+    "n",
+    "e",
+    "d",
+    "vn",
+    "ve",
+    "vd",
+    "qw",
+    "qx",
+    "qy",
+    "qz",
+    "map_aided",
+];
+
+/// Solutions as CSV with round-trip `f64` text (fathom-report's CSV writer).
+///
+/// # Errors
+/// [`PilsError::Model`] if the CSV cannot be formatted (it is written in memory).
+pub fn solutions_csv(sols: &BTreeMap<u64, Solution>) -> Result<String, PilsError> {
+    csv_string(|w| {
+        w.record(SOLUTIONS_HEADER)?;
+        for (k, x) in sols {
+            solution_record(w, *k, x)?;
+        }
+        Ok(())
+    })
+    .map_err(|e| PilsError::model("solutions.csv", e))
+}
+
+/// One solution's record of `solutions.csv`.
+fn solution_record(w: &mut CsvWriter<Vec<u8>>, step: u64, x: &Solution) -> std::io::Result<()> {
+    let q = x.nav_from_body.quaternion();
+    w.display(step)?;
+    for v in [
+        x.time,
+        x.pos_in_nav.x,
+        x.pos_in_nav.y,
+        x.pos_in_nav.z,
+        x.vel_in_nav.x,
+        x.vel_in_nav.y,
+        x.vel_in_nav.z,
+        q.w,
+        q.i,
+        q.j,
+        q.k,
+    ] {
+        w.float(v)?;
     }
-    s
+    w.display(u8::from(x.map_aided))?;
+    w.end_record()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Matrix3, UnitQuaternion, Vector3};
+
+    fn stats(rmse_3d: f64) -> ErrorStats {
+        ErrorStats {
+            samples: 10,
+            rmse_h: 0.5,
+            rmse_3d,
+            rmse_vel: 0.1,
+            rmse_roll: 0.2,
+            rmse_pitch: 0.3,
+            rmse_yaw: 1.5,
+            mean_3d: 0.9,
+            p95_3d: 2.0,
+            time_map_aided_s: 12.5,
+        }
+    }
+
+    fn report() -> SimReport {
+        SimReport {
+            status: "ok".into(),
+            method: "MGPMF".into(),
+            pacing: "lockstep".into(),
+            steps_sent: 100,
+            steps_total: 100,
+            solutions: 90,
+            late_solutions: 0,
+            retransmissions: 0,
+            latency: None,
+            wall_s: 1.0,
+            sim_s: 1.0,
+            real_time_factor: 1.0,
+            link: LinkCounters::default(),
+            pils: Some(stats(1.25)),
+            offline_quantized: Some(stats(1.25)),
+            offline: None,
+            difference_to_offline: BTreeMap::new(),
+            equal_to_offline_quantized: Some(true),
+        }
+    }
+
+    /// `summary.json` is the shared contract: it reads back as a `Summary` (what
+    /// `read_summary_json` does) with the settings' seed as `base_seed`, one row per
+    /// evaluated method and metric, and the session's facts as extra keys.
+    #[test]
+    fn sim_summary_is_the_shared_contract() {
+        let sol = Solution {
+            step: 7,
+            time: 0.01,
+            pos_in_nav: Vector3::new(1.0, -2.5, 0.1),
+            vel_in_nav: Vector3::new(0.0, 1e-7, -0.5),
+            nav_from_body: UnitQuaternion::identity(),
+            omega_body: Vector3::zeros(),
+            pos_cov: Matrix3::identity(),
+            att_cov: Matrix3::identity(),
+            pos_att_cov: Matrix3::zeros(),
+            vel_cov: Matrix3::identity(),
+            map_aided: true,
+        };
+        let sols = BTreeMap::from([(7u64, sol)]);
+        let files = sim_files(&report(), &sols, 42, 3).unwrap();
+        let text = &files.iter().find(|f| f.0 == "summary.json").unwrap().1;
+        let back: Summary = serde_json::from_str(text).unwrap();
+        assert_eq!(
+            (back.experiment.as_str(), back.runs, back.base_seed),
+            ("pils", 1, 42)
+        );
+        assert_eq!(back.seed_doc, SEED_DOC);
+        assert_eq!(back.rows.len(), 18);
+        assert_eq!(back.row("pils/MGPMF", "rmse_3d").unwrap().value, 1.25);
+        assert!(back.row("offline/MGPMF", "rmse_3d").is_none());
+        assert!(back.claims.is_empty());
+        assert_eq!(back.extra["run"], 3);
+        assert_eq!(back.extra["pacing"], "lockstep");
+        assert_eq!(back.extra["equal_to_offline_quantized"], true);
+        assert!(!back.extra.contains_key("non_finite"));
+        let csv = &files.iter().find(|f| f.0 == "solutions.csv").unwrap().1;
+        assert_eq!(
+            csv,
+            "step,time,n,e,d,vn,ve,vd,qw,qx,qy,qz,map_aided\n\
+             7,0.01,1,-2.5,0.1,0,0.0000001,-0.5,1,0,0,0,1\n"
+        );
+        // A diverged metric has no row (JSON has no NaN) and is named instead.
+        let mut r = report();
+        r.pils = Some(stats(f64::NAN));
+        let s = sim_summary(&r, 42, 3);
+        assert!(s.row("pils/MGPMF", "rmse_3d").is_none());
+        assert_eq!(s.extra["non_finite"][0], "pils/MGPMF rmse_3d");
+        assert!(s.to_json_pretty().is_ok());
+    }
 }

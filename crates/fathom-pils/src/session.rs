@@ -148,7 +148,7 @@ pub fn simulate_prepared(
         difference_to_offline: diff,
         equal_to_offline_quantized: equal,
     };
-    let files = sim_files(&report, &o.solutions);
+    let files = sim_files(&report, &o.solutions, s.file.seed, s.file.run)?;
     Ok(Session {
         report,
         files,
@@ -217,7 +217,7 @@ pub fn navigate_on(
             "nav.json",
             serde_json::to_string_pretty(&r).unwrap_or_default(),
         ),
-        ("solutions.csv", solutions_csv(&o.solutions)),
+        ("solutions.csv", solutions_csv(&o.solutions)?),
     ];
     Ok(Session {
         report: r,
@@ -247,7 +247,7 @@ pub fn offline_csv(s: &Settings, method: Method, quantized: bool) -> Result<Stri
     let sh = Shared::new(s.file.flight.clone())?;
     let run = SimulatedRun::new(&sh, s.file.seed, s.file.run)?;
     let sols = offline(&sh, &run, method, quantized)?;
-    Ok(solutions_csv(&sols))
+    solutions_csv(&sols)
 }
 
 #[cfg(test)]
@@ -294,8 +294,8 @@ mod tests {
         let q = offline(&sh, &run, s.method, true).unwrap();
         let f = offline(&sh, &run, s.method, false).unwrap();
         let csv = |name: &str| r.files.iter().find(|(n, _)| *n == name).unwrap().1.clone();
-        assert_eq!(csv("solutions.csv"), solutions_csv(&q));
-        assert_ne!(solutions_csv(&q), solutions_csv(&f));
+        assert_eq!(csv("solutions.csv"), solutions_csv(&q).unwrap());
+        assert_ne!(solutions_csv(&q).unwrap(), solutions_csv(&f).unwrap());
         assert_eq!(r.report.solutions, q.len());
         let c = &r.report.link;
         assert!(c.datagrams_lost_injected > 0 && c.junk_sent > 0, "{c:?}");

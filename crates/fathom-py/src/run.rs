@@ -9,11 +9,11 @@
 //! (`FileNotFoundError` when it does not exist); a failure while running raises
 //! `RuntimeError`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use fathom_experiments::registry;
 use fathom_report::output::Summary;
-use fathom_sim::experiment::{Environment, Executed, Job};
+use fathom_sim::experiment::{Environment, Executed, Job, OutputFile};
 use fathom_sim::user_run::{
     RunOptions, assess_scenario, check_command, check_scenario_text, one_line, run_scenario_text,
 };
@@ -194,7 +194,7 @@ const CONTRACT_KEYS: [&str; 6] = [
 fn build_result(
     py: Python<'_>,
     summary: &Summary,
-    files: &[(String, String)],
+    files: &[&OutputFile],
     resolved_toml: String,
     out_dir: Option<String>,
 ) -> PyResult<RunResult> {
@@ -219,11 +219,11 @@ fn build_result(
     }
     let series = PyDict::new(py);
     let figures = PyDict::new(py);
-    for (name, content) in files {
-        if name.ends_with(".csv") {
-            series.set_item(name, csv::columns(py, name, content)?)?;
-        } else if name.ends_with(".svg") {
-            figures.set_item(name, content)?;
+    for f in files {
+        if let Some(columns) = f.content.csv_columns() {
+            series.set_item(&f.name, csv::columns(py, columns)?)?;
+        } else if f.name.ends_with(".svg") {
+            figures.set_item(&f.name, f.content.to_text())?;
         }
     }
     Ok(RunResult {
@@ -289,12 +289,7 @@ pub fn run(
                     assess_scenario(&job, &registry())?.1.execute()
                 })
                 .map_err(|e| to_py_err(&e))?;
-            let files: Vec<(String, String)> = executed
-                .analysis
-                .files()
-                .iter()
-                .map(|f| (f.name.clone(), f.content.to_text()))
-                .collect();
+            let files: Vec<&OutputFile> = executed.analysis.files().iter().collect();
             build_result(py, &executed.summary, &files, executed.resolved.toml, None)
         }
         Some(out_dir) => {
@@ -316,7 +311,10 @@ pub fn run(
                     run_scenario_text(&scenario.text, &scenario.label, &options, &registry(), None)
                 })
                 .map_err(|e| to_py_err(&e))?;
-            let files = read_outputs(&result.out_dir)?;
+            // Sorted by name: the order `series` and `figures` had when the files were
+            // read back from the folder.
+            let mut files: Vec<&OutputFile> = result.files.iter().collect();
+            files.sort_by(|a, b| a.name.cmp(&b.name));
             build_result(
                 py,
                 &result.summary,
@@ -326,24 +324,4 @@ pub fn run(
             )
         }
     }
-}
-
-/// The CSV and SVG files `fathom run` wrote into `dir`, sorted by name.
-fn read_outputs(dir: &Path) -> PyResult<Vec<(String, String)>> {
-    let io =
-        |e: std::io::Error| PyOSError::new_err(format!("cannot read `{}`: {e}", dir.display()));
-    let mut files = Vec::new();
-    for entry in std::fs::read_dir(dir).map_err(io)? {
-        let path = entry.map_err(io)?.path();
-        let name = path
-            .file_name()
-            .and_then(|n| n.to_str())
-            .unwrap_or_default()
-            .to_string();
-        if path.is_file() && (name.ends_with(".csv") || name.ends_with(".svg")) {
-            files.push((name, std::fs::read_to_string(&path).map_err(io)?));
-        }
-    }
-    files.sort();
-    Ok(files)
 }

@@ -3,6 +3,8 @@
 //!
 //! - [`output`]: the `summary.json` contract ([`Summary`](output::Summary), rows and
 //!   claims), CSV series and Markdown / console tables;
+//! - [`csv_writer`]: the one CSV writer ([`CsvWriter`](csv_writer::CsvWriter), a
+//!   `csv::Writer` with fathom's settings) every CSV file goes through;
 //! - [`plot`]: SVG line, plan-view, histogram, heat-map and sample-time figures;
 //! - [`outdir`]: the output folder that never loses work ([`OutDir`](outdir::OutDir):
 //!   claim before computing, atomic commit, `run_info.json`).
@@ -10,6 +12,7 @@
 //! The crate depends on `fathom-core` only: it draws and writes numbers that the
 //! statistics and the experiments computed.
 
+pub mod csv_writer;
 pub mod error;
 pub mod outdir;
 pub mod output;

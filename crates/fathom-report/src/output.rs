@@ -14,13 +14,16 @@
 //! Plain comma-separated text, one header row whose column names carry the unit
 //! (`time_s,err_3d_m`), `\n` line ends, floats written with Rust's shortest round-trip
 //! formatting (`{}`: `0.1`, `0.0000001`, `NaN`, `inf`; never exponent notation), which is deterministic and exact.
+//! Every CSV goes through [`CsvWriter`] (`csv::Writer`, RFC 4180 quoting of text cells).
 
+use std::borrow::Cow;
 use std::fmt::Write as _;
 use std::path::Path;
 
 use serde::{Deserialize, Serialize};
 
 use crate::ReportError;
+pub use crate::csv_writer::{CsvWriter, csv_float, csv_string};
 
 /// One compared quantity: a method's metric, the paper's number and the reproduced one.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -277,11 +280,6 @@ pub fn write_with(
         .map_err(|e| ReportError::io("write", path, e))
 }
 
-/// Format a float for CSV: shortest round-trip representation (`{}`), deterministic.
-pub fn csv_float(x: f64) -> String {
-    format!("{x}")
-}
-
 fn check_headers(path: &Path, headers: &[&str]) -> Result<(), ReportError> {
     if headers.is_empty() {
         return Err(ReportError::Output {
@@ -349,24 +347,16 @@ pub fn stream_csv_columns<S: AsRef<str>>(
     headers: &[S],
     columns: &[impl AsRef<[f64]>],
 ) -> std::io::Result<()> {
-    for (j, h) in headers.iter().enumerate() {
-        if j > 0 {
-            w.write_all(b",")?;
-        }
-        w.write_all(h.as_ref().as_bytes())?;
-    }
-    w.write_all(b"\n")?;
+    let mut out = CsvWriter::new(w);
+    out.record(headers)?;
     let n = columns.first().map_or(0, |c| c.as_ref().len());
     for i in 0..n {
-        for (j, c) in columns.iter().enumerate() {
-            if j > 0 {
-                w.write_all(b",")?;
-            }
-            write!(w, "{}", c.as_ref()[i])?;
+        for c in columns {
+            out.float(c.as_ref()[i])?;
         }
-        w.write_all(b"\n")?;
+        out.end_record()?;
     }
-    Ok(())
+    out.finish().map(drop)
 }
 
 /// Build CSV text from equal-length numeric columns (e.g. `time_s`, `err_3d_m`).
@@ -441,17 +431,23 @@ impl From<i64> for CsvCell {
 }
 
 impl CsvCell {
-    fn render(&self) -> String {
+    /// The cell's text before quoting: a number in the [`csv_float`] format, an
+    /// integer in decimal, a text cell as it is.
+    pub fn to_text(&self) -> Cow<'_, str> {
         match self {
-            CsvCell::Num(v) => csv_float(*v),
-            CsvCell::Int(v) => v.to_string(),
-            CsvCell::Text(s) => {
-                if s.contains([',', '"', '\n', '\r']) {
-                    format!("\"{}\"", s.replace('"', "\"\""))
-                } else {
-                    s.clone()
-                }
-            }
+            CsvCell::Num(v) => Cow::Owned(csv_float(*v)),
+            CsvCell::Int(v) => Cow::Owned(v.to_string()),
+            CsvCell::Text(s) => Cow::Borrowed(s),
+        }
+    }
+
+    /// The cell as a number: `Num` and `Int` cells (an integer beyond 2^53 rounded to
+    /// the nearest `f64`), `None` for text.
+    pub fn number(&self) -> Option<f64> {
+        match self {
+            CsvCell::Num(v) => Some(*v),
+            CsvCell::Int(v) => Some(*v as f64),
+            CsvCell::Text(_) => None,
         }
     }
 }
@@ -466,9 +462,28 @@ pub fn csv_records_text(
     headers: &[&str],
     records: &[Vec<CsvCell>],
 ) -> Result<String, ReportError> {
+    check_csv_records(path, headers, records)?;
+    let mut out = Vec::new();
+    stream_csv_records(&mut out, headers, records)
+        .map_err(|e| ReportError::io("format", path, e))?;
+    String::from_utf8(out).map_err(|e| ReportError::Output {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    })
+}
+
+/// Checks CSV headers and that every record has one cell per header (labelled with
+/// `path`).
+///
+/// # Errors
+/// [`ReportError::Output`] naming the bad header or the first record of the wrong
+/// length.
+pub fn check_csv_records(
+    path: &Path,
+    headers: &[&str],
+    records: &[Vec<CsvCell>],
+) -> Result<(), ReportError> {
     check_headers(path, headers)?;
-    let mut out = headers.join(",");
-    out.push('\n');
     for (i, r) in records.iter().enumerate() {
         if r.len() != headers.len() {
             return Err(ReportError::Output {
@@ -480,11 +495,25 @@ pub fn csv_records_text(
                 ),
             });
         }
-        let cells: Vec<String> = r.iter().map(CsvCell::render).collect();
-        out.push_str(&cells.join(","));
-        out.push('\n');
     }
-    Ok(out)
+    Ok(())
+}
+
+/// Streams checked records as CSV text into `w` (the bytes of [`csv_records_text`]).
+///
+/// # Errors
+/// The writer's I/O error.
+pub fn stream_csv_records<S: AsRef<str>>(
+    w: &mut (impl std::io::Write + ?Sized),
+    headers: &[S],
+    records: &[Vec<CsvCell>],
+) -> std::io::Result<()> {
+    let mut out = CsvWriter::new(w);
+    out.record(headers)?;
+    for r in records {
+        out.record(r.iter().map(CsvCell::to_text))?;
+    }
+    out.finish().map(drop)
 }
 
 /// Write mixed text/number records as CSV (see [`csv_records_text`]).

@@ -113,14 +113,15 @@ fn lockstep_two_processes_equal_offline_quantized_run_despite_foreign_junk() {
     // Independently: the simulator's decoded solutions are the offline ones.
     let pils_csv = std::fs::read_to_string(dir.join("out/sim/solutions.csv")).unwrap();
     assert_eq!(pils_csv, offline_quantized(&dir, "pils.toml"));
-    let summary = json(&dir.join("out/sim/summary.json"));
-    assert!(
-        summary["rows"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .any(|r| r["method"] == "pils/MGPMF" && r["metric"] == "rmse_3d")
-    );
+    // summary.json is the shared contract: the reader of every job's summary reads it,
+    // with the settings' seed as `base_seed` and the session's facts as extra keys.
+    let summary = fathom_report::output::read_summary_json(dir.join("out/sim/summary.json"))
+        .unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((summary.runs, summary.base_seed), (1, 3));
+    assert!(summary.row("pils/MGPMF", "rmse_3d").is_some());
+    assert!(summary.row("offline_quantized/MGPMF", "rmse_3d").is_some());
+    assert_eq!(summary.extra["equal_to_offline_quantized"], true);
+    assert_eq!(summary.extra["pacing"], "lockstep");
 }
 
 #[test]

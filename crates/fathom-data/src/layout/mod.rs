@@ -282,16 +282,27 @@ pub fn number_text(x: f64) -> String {
     }
 }
 
-/// A CSV text: the header cells and the rows, numbers written by [`number_text`].
+/// A CSV text: the header cells and the rows, numbers written by [`number_text`]
+/// (`csv::Writer`: `,` between cells, `\n` line ends, a header cell quoted only if it
+/// holds a comma, a quote or a line break).
 pub fn csv_text(header: &[&str], rows: impl IntoIterator<Item = Vec<f64>>) -> String {
-    let mut out = header.join(",");
-    out.push('\n');
-    for row in rows {
-        let cells: Vec<String> = row.into_iter().map(number_text).collect();
-        out.push_str(&cells.join(","));
-        out.push('\n');
+    let mut out = Vec::new();
+    {
+        let mut w = csv::WriterBuilder::new()
+            .terminator(csv::Terminator::Any(b'\n'))
+            .quote_style(csv::QuoteStyle::Necessary)
+            .flexible(true)
+            .from_writer(&mut out);
+        // Writing into memory cannot fail: no I/O, and `flexible` leaves the record
+        // lengths to the caller (the tables' own checks read them back).
+        let _ = w.write_record(header);
+        for row in rows {
+            let _ = w.write_record(row.into_iter().map(number_text));
+        }
+        let _ = w.flush();
     }
-    out
+    // Header cells are `str` and numbers ASCII: the bytes are UTF-8.
+    String::from_utf8_lossy(&out).into_owned()
 }
 
 /// Writes a log folder: the manifest and the given `(file name, CSV text)` files.
@@ -376,6 +387,10 @@ mod tests {
         assert_eq!(
             csv_text(&["a[m]", "b"], [vec![1.5, 2.0]]),
             "a[m],b\n1.5,2\n"
+        );
+        assert_eq!(
+            csv_text(&["t[s]", "x"], [vec![-0.0, 1e-300], vec![f64::NAN, -3e20]]),
+            "t[s],x\n-0,1e-300\nNaN,-3e20\n"
         );
     }
 

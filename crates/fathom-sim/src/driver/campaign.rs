@@ -450,6 +450,7 @@ pub fn merge(
         elapsed_s: elapsed.as_secs_f64(),
         files: Vec::new(),
     })?;
+    result.files = executed.analysis.files;
     Ok((result, first))
 }
 

@@ -29,7 +29,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use crate::SimError;
-use crate::experiment::{Assessed, DynExperiment, Executed, Job};
+use crate::experiment::{Assessed, DynExperiment, Executed, Job, OutputFile};
 use fathom_report::output::{Summary, write_summary_json, write_text, write_with};
 
 pub use fathom_report::outdir::{OutDir, RUN_INFO_FILE, RunInfo, write_file_atomically};
@@ -62,6 +62,9 @@ pub struct ExperimentResult {
     pub units: BTreeMap<String, String>,
     /// Whether the scenario is the paper's setup, or which keys differ from it.
     pub setup: Setup,
+    /// The figure and CSV files written, as the analysis made them (in its order):
+    /// what the Python bindings hand on without reading the files back.
+    pub files: Vec<OutputFile>,
 }
 
 /// The whole error chain of `e` joined with `": "` (like anyhow's `{:#}`).
@@ -154,6 +157,7 @@ pub fn execute_assessed_to(
         )?;
     }
     let deterministic = executed.resolved.base_seed.is_none();
+    result.files = executed.analysis.files;
     let mut info = RunInfo {
         fathom_version: env!("CARGO_PKG_VERSION").to_string(),
         command: options.command.clone(),
@@ -223,5 +227,7 @@ pub(crate) fn write_executed(
         skipped: executed.analysis.skipped.clone(),
         units: executed.analysis.units.clone(),
         setup: setup.clone(),
+        // Moved in by the caller, which owns the analysis (no copy of the tables).
+        files: Vec::new(),
     })
 }

@@ -5,7 +5,8 @@ use std::path::Path;
 
 use crate::SimError;
 use fathom_report::output::{
-    Claim, CsvCell, Row, check_csv_columns, csv_records_text, stream_csv_columns,
+    Claim, CsvCell, Row, check_csv_columns, check_csv_records, stream_csv_columns,
+    stream_csv_records,
 };
 use fathom_report::plot::Figure;
 
@@ -31,6 +32,23 @@ pub enum FileContent {
         /// Equal-length columns (checked when added).
         columns: Vec<Vec<f64>>,
     },
+    /// A table of text and number cells, formatted only while it is streamed.
+    Records {
+        /// Column headers.
+        headers: Vec<String>,
+        /// Records of one cell per header (checked when added).
+        records: Vec<Vec<CsvCell>>,
+    },
+}
+
+/// One column of a CSV output file as values (what the Python bindings turn into an
+/// array without reading the CSV text back).
+#[derive(Debug, Clone, PartialEq)]
+pub enum ColumnValues {
+    /// Every cell is a number (integer cells as `f64`).
+    Numbers(Vec<f64>),
+    /// Some cell is text: every cell's text as the file shows it (unquoted).
+    Text(Vec<String>),
 }
 
 impl FileContent {
@@ -42,6 +60,44 @@ impl FileContent {
         match self {
             Self::Text(text) => w.write_all(text.as_bytes()),
             Self::Columns { headers, columns } => stream_csv_columns(w, headers, columns),
+            Self::Records { headers, records } => stream_csv_records(w, headers, records),
+        }
+    }
+
+    /// The columns of a CSV file, `(header, values)` in file order; `None` for a
+    /// text file (a figure).
+    pub fn csv_columns(&self) -> Option<Vec<(&str, ColumnValues)>> {
+        match self {
+            Self::Text(_) => None,
+            Self::Columns { headers, columns } => Some(
+                headers
+                    .iter()
+                    .zip(columns)
+                    .map(|(h, c)| (h.as_str(), ColumnValues::Numbers(c.clone())))
+                    .collect(),
+            ),
+            Self::Records { headers, records } => Some(
+                headers
+                    .iter()
+                    .enumerate()
+                    .map(|(j, h)| {
+                        let numbers: Option<Vec<f64>> =
+                            records.iter().map(|r| r[j].number()).collect();
+                        let values = numbers.map_or_else(
+                            || {
+                                ColumnValues::Text(
+                                    records
+                                        .iter()
+                                        .map(|r| r[j].to_text().into_owned())
+                                        .collect(),
+                                )
+                            },
+                            ColumnValues::Numbers,
+                        );
+                        (h.as_str(), values)
+                    })
+                    .collect(),
+            ),
         }
     }
 
@@ -49,9 +105,9 @@ impl FileContent {
     pub fn to_text(&self) -> String {
         match self {
             Self::Text(text) => text.clone(),
-            Self::Columns { .. } => {
+            Self::Columns { .. } | Self::Records { .. } => {
                 let mut out = Vec::new();
-                // Writing into a Vec cannot fail and CSV of numbers is ASCII.
+                // Writing into a Vec cannot fail and the cells are UTF-8.
                 let _ = self.write_to(&mut out);
                 String::from_utf8_lossy(&out).into_owned()
             }
@@ -196,8 +252,15 @@ impl Analysis {
         headers: &[&str],
         records: &[Vec<CsvCell>],
     ) -> Result<(), SimError> {
-        let content = csv_records_text(Path::new(name), headers, records)?;
-        self.file(name, "csv", FileContent::Text(content))
+        check_csv_records(Path::new(name), headers, records)?;
+        self.file(
+            name,
+            "csv",
+            FileContent::Records {
+                headers: headers.iter().map(|h| (*h).to_owned()).collect(),
+                records: records.to_vec(),
+            },
+        )
     }
 
     /// The files added so far.
@@ -251,5 +314,39 @@ mod tests {
         assert!(a.csv_columns("summary.json", &["x_m"], &[&[1.0]]).is_err());
         assert_eq!(a.files().len(), 1);
         assert_eq!(a.files()[0].content.to_text(), "x_m\n1\n");
+    }
+
+    /// The columns handed on as values: numbers stay numbers (integers too), a
+    /// column with a text cell is text as the file shows it; figures have none.
+    #[test]
+    fn csv_columns_as_values() {
+        let mut a = Analysis::new();
+        a.csv_columns("c.csv", &["t_s", "e_m"], &[&[0.0, 0.5], &[1.0, f64::NAN]])
+            .unwrap();
+        a.csv_records(
+            "r.csv",
+            &["name", "run", "v", "gap"],
+            &[
+                vec!["a,b".into(), 3usize.into(), 0.25.into(), 1.0.into()],
+                vec!["c".into(), 4usize.into(), 1e-7.into(), "".into()],
+            ],
+        )
+        .unwrap();
+        let c = a.files()[0].content.csv_columns().unwrap();
+        assert_eq!(c[0], ("t_s", ColumnValues::Numbers(vec![0.0, 0.5])));
+        assert!(matches!(&c[1].1, ColumnValues::Numbers(v) if v[1].is_nan()));
+        let r = &a.files()[1].content;
+        assert_eq!(
+            r.to_text(),
+            "name,run,v,gap\n\"a,b\",3,0.25,1\nc,4,0.0000001,\n"
+        );
+        let r = r.csv_columns().unwrap();
+        let names: Vec<&str> = r.iter().map(|c| c.0).collect();
+        assert_eq!(names, ["name", "run", "v", "gap"]);
+        assert_eq!(r[0].1, ColumnValues::Text(vec!["a,b".into(), "c".into()]));
+        assert_eq!(r[1].1, ColumnValues::Numbers(vec![3.0, 4.0]));
+        assert_eq!(r[2].1, ColumnValues::Numbers(vec![0.25, 1e-7]));
+        assert_eq!(r[3].1, ColumnValues::Text(vec!["1".into(), String::new()]));
+        assert!(FileContent::Text("<svg/>".into()).csv_columns().is_none());
     }
 }

@@ -44,7 +44,7 @@ use serde::de::DeserializeOwned;
 use crate::SimError;
 use crate::cost::{CostTerm, Limits};
 
-pub use analysis::{Analysis, FileContent, OutputFile};
+pub use analysis::{Analysis, ColumnValues, FileContent, OutputFile};
 pub use dynamic::{
     Assessed, DynExperiment, Executed, FoundRecord, Job, Plan, RecordSink, RecordSource, Resolved,
     Shard, SingleRunFn, check_overrides,
