@@ -309,7 +309,7 @@ mod tests {
     use super::*;
 
     fn set(files: &[(&'static str, &str)]) -> FileSet {
-        super::super::file_set(LogKind::InsDvl, files)
+        super::super::tests::file_set(LogKind::InsDvl, files)
     }
 
     const INIT: &str = "time[s],latitude[deg],longitude[deg],depth[m],vel_north[m/s],vel_east[m/s],vel_down[m/s],roll[deg],pitch[deg],heading[deg]\n0,35,129,50,1,0,0,0,0,90\n";

@@ -321,20 +321,6 @@ pub fn series_text(value_header: &str, rows: &[(f64, f64)]) -> String {
     )
 }
 
-/// A file set of `kind` in the folder `log` from `(file name, text)` pairs (the
-/// parsers' tests).
-#[cfg(test)]
-pub(crate) fn file_set(kind: LogKind, files: &[(&'static str, &str)]) -> FileSet {
-    FileSet {
-        dir: "log".into(),
-        manifest: Manifest::new(kind, ""),
-        files: files
-            .iter()
-            .map(|(n, t)| (*n, t.as_bytes().to_vec()))
-            .collect(),
-    }
-}
-
 /// Writes a log folder: the manifest and the given `(file name, CSV text)` files.
 /// Creates `dir`; refuses a folder that already holds a `log.toml` or any of the
 /// files (a log is never overwritten).
@@ -371,8 +357,21 @@ pub fn write_log(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// A file set of `kind` in the folder `log` from `(file name, text)` pairs (the
+    /// parsers' tests).
+    pub(crate) fn file_set(kind: LogKind, files: &[(&'static str, &str)]) -> FileSet {
+        FileSet {
+            dir: "log".into(),
+            manifest: Manifest::new(kind, ""),
+            files: files
+                .iter()
+                .map(|(n, t)| (*n, t.as_bytes().to_vec()))
+                .collect(),
+        }
+    }
 
     #[test]
     fn manifest_round_trip_and_errors_name_the_key() {

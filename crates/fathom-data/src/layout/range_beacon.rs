@@ -398,7 +398,7 @@ mod tests {
     use super::*;
 
     fn set(files: &[(&'static str, &str)]) -> FileSet {
-        super::super::file_set(LogKind::RangeBeacon, files)
+        super::super::tests::file_set(LogKind::RangeBeacon, files)
     }
 
     fn odometry_log() -> Vec<(&'static str, &'static str)> {
