@@ -26,10 +26,14 @@ pub mod __private {
 /// `velocity_filter_config(&self, file, speed0, rpm_sigma)`. The caller depends on
 /// `serde` and `schemars`.
 ///
-/// ```ignore
+/// ```
 /// fathom_replay::vkf_toml! {
-///     /// `[vkf]`.
-///     pub struct VkfToml { .. }
+///     /// `[vkf]` with one more key.
+///     pub struct VkfTuningToml {
+///         ..
+///         /// Revolution noise σ.
+///         pub rpm_sigma: f64,
+///     }
 /// }
 /// ```
 #[macro_export]
@@ -141,11 +145,11 @@ macro_rules! vkf_toml {
 /// `integrated_nav_config(&self, file)`. The caller depends on `serde` and
 /// `schemars`.
 ///
-/// ```ignore
+/// ```
 /// fathom_replay::nav_filter_toml! {
-///     /// `[nav_filter]`.
+///     /// `[nav_filter]` with a key before the filter's.
 ///     pub struct NavTuningToml {
-///         /// ...
+///         /// Covariance period, s.
 ///         pub covariance_period_s: f64,
 ///         ..
 ///     }
