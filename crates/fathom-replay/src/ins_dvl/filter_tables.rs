@@ -21,6 +21,20 @@ pub mod __private {
     pub use fathom_sim::SimError;
 }
 
+/// A settings table's struct with the derives and the strictness of every scenario
+/// table (the two macros below fill in the keys).
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __filter_table {
+    ($(#[$attr:meta])* $vis:vis struct $name:ident { $($body:tt)* }) => {
+        $(#[$attr])*
+        #[derive(Debug, Clone, PartialEq)]
+        #[derive(::serde::Serialize, ::serde::Deserialize, ::schemars::JsonSchema)]
+        #[serde(deny_unknown_fields)]
+        $vis struct $name { $($body)* }
+    };
+}
+
 /// Declares a `[vkf]` table: the velocity Kalman filter `[V, sf, b]`'s keys, then the
 /// keys given after `..`, and its check
 /// `velocity_filter_config(&self, file, speed0, rpm_sigma)`. The caller depends on
@@ -45,59 +59,52 @@ macro_rules! vkf_toml {
             $($(#[$extra_attr:meta])* pub $extra:ident: $extra_ty:ty,)*
         }
     ) => {
-        $(#[$attr])*
-        #[derive(
-            Debug,
-            Clone,
-            PartialEq,
-            ::serde::Serialize,
-            ::serde::Deserialize,
-            ::schemars::JsonSchema,
-        )]
-        #[serde(deny_unknown_fields)]
-        $vis struct $name {
-            /// Initial scale-factor estimate (true value: `rpm.k_mps_per_rpm`).
-            ///
-            /// Unit: m/s per rpm. Range: finite.
-            pub sf0: f64,
-            /// Initial bias estimate (true value: `rpm.b_mps`).
-            ///
-            /// Unit: m/s. Range: finite.
-            pub b0: f64,
-            /// Initial forward-speed σ.
-            ///
-            /// Unit: m/s. Range: > 0.
-            pub sigma_speed0_mps: f64,
-            /// Initial scale-factor σ.
-            ///
-            /// Unit: m/s per rpm. Range: > 0.
-            pub sigma_sf0: f64,
-            /// Initial bias σ.
-            ///
-            /// Unit: m/s. Range: > 0.
-            pub sigma_b0_mps: f64,
-            /// Extra forward-speed process noise σ per VKF step (one step per DVL epoch).
-            ///
-            /// Unit: m/s. Range: ≥ 0.
-            pub speed_process_sigma_mps: f64,
-            /// Scale-factor random-walk PSD.
-            ///
-            /// Unit: (m/s/rpm)²/s. Range: ≥ 0.
-            pub sf_rw_psd: f64,
-            /// Bias random-walk PSD.
-            ///
-            /// Unit: (m/s)²/s. Range: ≥ 0.
-            pub bias_rw_psd: f64,
-            /// σ of the DVL forward body speed assumed by the VKF's update.
-            ///
-            /// Unit: m/s. Range: > 0.
-            pub dvl_sigma_mps: f64,
-            /// σ of the lateral and vertical body speeds assumed zero when the switching box
-            /// uses RPM speed (eqs. 11-12).
-            ///
-            /// Unit: m/s. Range: > 0.
-            pub lateral_sigma_mps: f64,
-            $($(#[$extra_attr])* pub $extra: $extra_ty,)*
+        $crate::__filter_table! {
+            $(#[$attr])*
+            $vis struct $name {
+                /// Initial scale-factor estimate (true value: `rpm.k_mps_per_rpm`).
+                ///
+                /// Unit: m/s per rpm. Range: finite.
+                pub sf0: f64,
+                /// Initial bias estimate (true value: `rpm.b_mps`).
+                ///
+                /// Unit: m/s. Range: finite.
+                pub b0: f64,
+                /// Initial forward-speed σ.
+                ///
+                /// Unit: m/s. Range: > 0.
+                pub sigma_speed0_mps: f64,
+                /// Initial scale-factor σ.
+                ///
+                /// Unit: m/s per rpm. Range: > 0.
+                pub sigma_sf0: f64,
+                /// Initial bias σ.
+                ///
+                /// Unit: m/s. Range: > 0.
+                pub sigma_b0_mps: f64,
+                /// Extra forward-speed process noise σ per VKF step (one step per DVL epoch).
+                ///
+                /// Unit: m/s. Range: ≥ 0.
+                pub speed_process_sigma_mps: f64,
+                /// Scale-factor random-walk PSD.
+                ///
+                /// Unit: (m/s/rpm)²/s. Range: ≥ 0.
+                pub sf_rw_psd: f64,
+                /// Bias random-walk PSD.
+                ///
+                /// Unit: (m/s)²/s. Range: ≥ 0.
+                pub bias_rw_psd: f64,
+                /// σ of the DVL forward body speed assumed by the VKF's update.
+                ///
+                /// Unit: m/s. Range: > 0.
+                pub dvl_sigma_mps: f64,
+                /// σ of the lateral and vertical body speeds assumed zero when the switching box
+                /// uses RPM speed (eqs. 11-12).
+                ///
+                /// Unit: m/s. Range: > 0.
+                pub lateral_sigma_mps: f64,
+                $($(#[$extra_attr])* pub $extra: $extra_ty,)*
+            }
         }
 
         impl $name {
@@ -165,45 +172,38 @@ macro_rules! nav_filter_toml {
             $($(#[$extra_attr:meta])* pub $extra:ident: $extra_ty:ty,)*
         }
     ) => {
-        $(#[$attr])*
-        #[derive(
-            Debug,
-            Clone,
-            PartialEq,
-            ::serde::Serialize,
-            ::serde::Deserialize,
-            ::schemars::JsonSchema,
-        )]
-        #[serde(deny_unknown_fields)]
-        $vis struct $name {
-            $($(#[$first_attr])* pub $first: $first_ty,)*
-            /// White acceleration PSD of the 9-state filter.
-            ///
-            /// Unit: m²/s³. Range: > 0.
-            pub accel_psd: f64,
-            /// Acceleration-bias random-walk PSD of the 9-state filter.
-            ///
-            /// Unit: (m/s²)²/s. Range: ≥ 0.
-            pub accel_bias_rw_psd: f64,
-            /// Initial position σ of the 9-state filters and the ESKF.
-            ///
-            /// Unit: m. Range: > 0.
-            pub sigma0_pos_m: f64,
-            /// Initial velocity σ of the 9-state filters and the ESKF.
-            ///
-            /// Unit: m/s. Range: > 0.
-            pub sigma0_vel_mps: f64,
-            /// Initial acceleration-bias σ of the 9-state filter.
-            ///
-            /// Unit: m/s². Range: > 0.
-            pub sigma0_accel_bias_mps2: f64,
-            /// Frame of the 9-state filter's bias: `"body"` an accelerometer bias (enters as
-            /// `C_b^n b`), `"nav"` a bias of the navigation-frame acceleration input (dominated
-            /// by the uncorrected INS tilt).
-            ///
-            /// Range: `"body"` or `"nav"`.
-            pub accel_bias_frame: String,
-            $($(#[$extra_attr])* pub $extra: $extra_ty,)*
+        $crate::__filter_table! {
+            $(#[$attr])*
+            $vis struct $name {
+                $($(#[$first_attr])* pub $first: $first_ty,)*
+                /// White acceleration PSD of the 9-state filter.
+                ///
+                /// Unit: m²/s³. Range: > 0.
+                pub accel_psd: f64,
+                /// Acceleration-bias random-walk PSD of the 9-state filter.
+                ///
+                /// Unit: (m/s²)²/s. Range: ≥ 0.
+                pub accel_bias_rw_psd: f64,
+                /// Initial position σ of the 9-state filters and the ESKF.
+                ///
+                /// Unit: m. Range: > 0.
+                pub sigma0_pos_m: f64,
+                /// Initial velocity σ of the 9-state filters and the ESKF.
+                ///
+                /// Unit: m/s. Range: > 0.
+                pub sigma0_vel_mps: f64,
+                /// Initial acceleration-bias σ of the 9-state filter.
+                ///
+                /// Unit: m/s². Range: > 0.
+                pub sigma0_accel_bias_mps2: f64,
+                /// Frame of the 9-state filter's bias: `"body"` an accelerometer bias (enters as
+                /// `C_b^n b`), `"nav"` a bias of the navigation-frame acceleration input (dominated
+                /// by the uncorrected INS tilt).
+                ///
+                /// Range: `"body"` or `"nav"`.
+                pub accel_bias_frame: String,
+                $($(#[$extra_attr])* pub $extra: $extra_ty,)*
+            }
         }
 
         impl $name {
