@@ -18,6 +18,7 @@ use nalgebra::{DMatrix, DVector};
 
 use crate::error::check_finite_entries;
 use crate::kalman::check_time;
+use crate::noise::check_process_noise;
 use crate::{EstimatorError, StackedUpdateInfo};
 
 /// Largest state size accepted (a 4096 x 4096 covariance is 128 MiB; larger sizes
@@ -102,41 +103,6 @@ pub fn check_covariance(what: &str, cov: &DMatrix<f64>, time: Time) -> Result<()
             what: what.to_owned(),
             time,
         });
-    }
-    Ok(())
-}
-
-/// The process noise check of the fixed-size prediction: finite, non-negative
-/// diagonal, symmetric within [`SYMMETRY_TOLERANCE`] relative to the largest diagonal
-/// entry ("process noise Q").
-fn check_process_noise(q: &DMatrix<f64>, time: Time) -> Result<(), EstimatorError> {
-    const WHAT: &str = "process noise Q";
-    let n = q.nrows();
-    check_finite_entries(WHAT, n, n, |r, c| q[(r, c)], time)?;
-    let mut scale = f64::MIN_POSITIVE;
-    for i in 0..n {
-        let d = q[(i, i)];
-        if d < 0.0 {
-            return Err(EstimatorError::NotPositiveDefinite {
-                what: format!("{WHAT} (diagonal entry {i} = {d})"),
-                time,
-            });
-        }
-        scale = scale.max(d);
-    }
-    for r in 0..n {
-        for c in (r + 1)..n {
-            let diff = (q[(r, c)] - q[(c, r)]).abs();
-            if diff > SYMMETRY_TOLERANCE * scale {
-                return Err(EstimatorError::NotSymmetric {
-                    what: WHAT.into(),
-                    row: r,
-                    col: c,
-                    diff,
-                    time,
-                });
-            }
-        }
     }
     Ok(())
 }

@@ -176,6 +176,23 @@ impl EstimatorError {
     }
 }
 
+/// Finite entries of a matrix stored column-major in `data` (`rows x cols`): a
+/// vectorizable fast path, and the row-major index of the first non-finite entry (as
+/// [`check_finite_entries`]) only when there is one.
+#[inline]
+pub(crate) fn check_finite(
+    what: &str,
+    data: &[f64],
+    rows: usize,
+    cols: usize,
+    time: Time,
+) -> Result<(), EstimatorError> {
+    if crate::linalg::all_finite(data) {
+        return Ok(());
+    }
+    check_finite_entries(what, rows, cols, |r, c| data[c * rows + r], time)
+}
+
 /// Checks every entry of a (row x col) matrix given by `get` is finite; reports the
 /// first offending entry with a row-major index.
 pub(crate) fn check_finite_entries(

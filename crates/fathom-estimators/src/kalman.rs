@@ -4,14 +4,16 @@
 
 use crate::{
     EstimatorError, MeasurementNoise, ProcessNoise,
-    error::check_finite_entries,
+    error::{check_finite, check_finite_entries},
     gating::{Gate, GateThreshold, UpdateInfo},
     lanes::Isa,
-    linalg, simd,
+    linalg,
+    noise::check_process_noise,
+    simd,
 };
 use fathom_core::{
     Gaussian, Time,
-    gaussian::{SYMMETRY_TOLERANCE, check_covariance, symmetrize},
+    gaussian::{check_covariance, symmetrize},
 };
 use nalgebra::{Matrix1, RowSVector, SMatrix, SVector};
 
@@ -804,58 +806,6 @@ fn updated_error<const N: usize>(
             what: "updated covariance P".into(),
             time,
         })
-}
-
-/// Finite entries of a fixed-size matrix stored column-major in `data` (`rows x
-/// cols`): a vectorizable fast path, and the row-major index of the first non-finite
-/// entry (as [`check_finite_entries`]) only when there is one.
-#[inline]
-fn check_finite(
-    what: &str,
-    data: &[f64],
-    rows: usize,
-    cols: usize,
-    time: Time,
-) -> Result<(), EstimatorError> {
-    if linalg::all_finite(data) {
-        return Ok(());
-    }
-    check_finite_entries(what, rows, cols, |r, c| data[c * rows + r], time)
-}
-
-/// `Q`: finite, symmetric (relative tolerance as `fathom_core`), non-negative diagonal.
-pub(crate) fn check_process_noise<const N: usize>(
-    q: &SMatrix<f64, N, N>,
-    time: Time,
-) -> Result<(), EstimatorError> {
-    const WHAT: &str = "process noise Q";
-    check_finite(WHAT, q.as_slice(), N, N, time)?;
-    let mut scale = f64::MIN_POSITIVE;
-    for i in 0..N {
-        let d = q[(i, i)];
-        if d < 0.0 {
-            return Err(EstimatorError::NotPositiveDefinite {
-                what: format!("{WHAT} (diagonal entry {i} = {d})"),
-                time,
-            });
-        }
-        scale = scale.max(d);
-    }
-    for r in 0..N {
-        for c in (r + 1)..N {
-            let diff = (q[(r, c)] - q[(c, r)]).abs();
-            if diff > SYMMETRY_TOLERANCE * scale {
-                return Err(EstimatorError::NotSymmetric {
-                    what: WHAT.into(),
-                    row: r,
-                    col: c,
-                    diff,
-                    time,
-                });
-            }
-        }
-    }
-    Ok(())
 }
 
 /// Finite and positive definite (Cholesky succeeds).

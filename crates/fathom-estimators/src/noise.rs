@@ -2,11 +2,56 @@
 //! positive definite) and [`ProcessNoise`] (`Q`: finite, symmetric, non-negative
 //! diagonal), so that filter steps with a constant noise do not re-check it every
 //! step ([`crate::KalmanFilter::update_with_noise`],
-//! [`crate::KalmanFilter::predict_with_noise`]).
+//! [`crate::KalmanFilter::predict_with_noise`]); and the one `Q` check that
+//! [`ProcessNoise`], the fixed-size [`crate::KalmanFilter`] and the run-time-size
+//! [`crate::DynKalmanFilter`] all run ([`check_process_noise`]).
 
-use crate::{EstimatorError, kalman::check_process_noise};
-use fathom_core::gaussian::{check_covariance, symmetrize};
-use nalgebra::{SMatrix, SVector};
+use crate::{EstimatorError, error::check_finite};
+use fathom_core::Time;
+use fathom_core::gaussian::{SYMMETRY_TOLERANCE, check_covariance, symmetrize};
+use nalgebra::{Dim, IsContiguous, Matrix, RawStorage, SMatrix, SVector};
+
+/// `Q` of any size, fixed or run-time (`q` square, checked by the caller): finite
+/// (the row-major index of the first bad entry), non-negative diagonal, symmetric
+/// within [`SYMMETRY_TOLERANCE`] relative to the largest diagonal entry; errors name
+/// "process noise Q" and carry `time`.
+pub(crate) fn check_process_noise<R: Dim, C: Dim, S>(
+    q: &Matrix<f64, R, C, S>,
+    time: Time,
+) -> Result<(), EstimatorError>
+where
+    S: RawStorage<f64, R, C> + IsContiguous,
+{
+    const WHAT: &str = "process noise Q";
+    let n = q.nrows();
+    check_finite(WHAT, q.as_slice(), n, n, time)?;
+    let mut scale = f64::MIN_POSITIVE;
+    for i in 0..n {
+        let d = q[(i, i)];
+        if d < 0.0 {
+            return Err(EstimatorError::NotPositiveDefinite {
+                what: format!("{WHAT} (diagonal entry {i} = {d})"),
+                time,
+            });
+        }
+        scale = scale.max(d);
+    }
+    for r in 0..n {
+        for c in (r + 1)..n {
+            let diff = (q[(r, c)] - q[(c, r)]).abs();
+            if diff > SYMMETRY_TOLERANCE * scale {
+                return Err(EstimatorError::NotSymmetric {
+                    what: WHAT.into(),
+                    row: r,
+                    col: c,
+                    diff,
+                    time,
+                });
+            }
+        }
+    }
+    Ok(())
+}
 
 /// A checked measurement noise covariance `R` (`M x M`, finite, symmetric within
 /// [`fathom_core::gaussian::SYMMETRY_TOLERANCE`], positive definite), stored exactly

@@ -72,18 +72,93 @@ impl TruthSample {
 }
 
 /// `(I + [a x])^{-1} b`, exact.
-pub(crate) fn solve_i_plus_skew(a: &Vector3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
+fn solve_i_plus_skew(a: &Vector3<f64>, b: &Vector3<f64>) -> Vector3<f64> {
     (b - a.cross(b) + a * a.dot(b)) / (1.0 + a.norm_squared())
+}
+
+/// What a streaming IMU inversion keeps between samples, whichever mechanization it
+/// inverts (this module's and [`crate::local_level`]'s): the previous sample `S`, the
+/// previous increment (its coning and sculling terms) and the sample count.
+#[derive(Debug, Clone, PartialEq)]
+pub(crate) struct InversionStep<S> {
+    prev: Option<S>,
+    prev_increment: Option<ImuIncrement>,
+    index: usize,
+}
+
+impl<S> Default for InversionStep<S> {
+    fn default() -> Self {
+        Self {
+            prev: None,
+            prev_increment: None,
+            index: 0,
+        }
+    }
+}
+
+impl<S: Copy> InversionStep<S> {
+    /// The previous sample and the interval `dt` to `sample` (`time_of` reads a
+    /// sample's time); `None` for the first sample, which is kept.
+    ///
+    /// # Errors
+    /// [`InsError::NonIncreasingTime`] if `sample` is not after the previous sample;
+    /// then nothing changes.
+    pub(crate) fn interval(
+        &mut self,
+        sample: &S,
+        time_of: impl Fn(&S) -> f64,
+    ) -> Result<Option<(S, f64)>, InsError> {
+        let time = time_of(sample);
+        let Some(prev) = self.prev else {
+            self.prev = Some(*sample);
+            self.index += 1;
+            return Ok(None);
+        };
+        let dt = time - time_of(&prev);
+        if dt.is_nan() || dt <= 0.0 {
+            return Err(InsError::NonIncreasingTime {
+                index: self.index,
+                prev: time_of(&prev),
+                time,
+            });
+        }
+        Ok(Some((prev, dt)))
+    }
+
+    /// The increment over `dt` from the body rotation vector `phi` (`q_{k-1}^* (x)
+    /// q_k` with the frame rotation removed) and the body-frame velocity change `u`
+    /// (gravity, Coriolis and frame rotation removed): undoes the coning correction,
+    /// then the rotation and sculling compensation (module docs), and moves on to
+    /// `sample`.
+    pub(crate) fn advance(
+        &mut self,
+        sample: &S,
+        dt: f64,
+        phi: &Vector3<f64>,
+        u: &Vector3<f64>,
+    ) -> ImuIncrement {
+        let (dth_prev, dv_prev) = match &self.prev_increment {
+            Some(p) => (p.delta_theta, p.delta_v),
+            None => (Vector3::zeros(), Vector3::zeros()),
+        };
+        let dth = solve_i_plus_skew(&(dth_prev / 12.0), phi);
+        let rhs = u - dv_prev.cross(&dth) / 12.0;
+        let a = dth * 0.5 + dth_prev / 12.0;
+        let dv = solve_i_plus_skew(&a, &rhs);
+        let inc = ImuIncrement::new(dt, dth, dv);
+        self.prev = Some(*sample);
+        self.prev_increment = Some(inc);
+        self.index += 1;
+        inc
+    }
 }
 
 /// Streaming inverse strapdown: push true samples in time order, get the increment
 /// over each interval (see the module docs). No allocation per sample.
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct ImuFromTruth {
-    prev: Option<TruthSample>,
+    step: InversionStep<TruthSample>,
     history: Option<NavHistory>,
-    prev_increment: Option<ImuIncrement>,
-    index: usize,
 }
 
 impl ImuFromTruth {
@@ -102,20 +177,9 @@ impl ImuFromTruth {
     pub fn push(&mut self, sample: &TruthSample) -> Result<Option<ImuIncrement>, InsError> {
         check_finite("truth time", &[sample.time])?;
         sample.to_ins_state().check()?;
-        let index = self.index;
-        let Some(prev) = self.prev else {
-            self.prev = Some(*sample);
-            self.index += 1;
+        let Some((prev, dt)) = self.step.interval(sample, |s| s.time)? else {
             return Ok(None);
         };
-        let dt = sample.time - prev.time;
-        if dt.is_nan() || dt <= 0.0 {
-            return Err(InsError::NonIncreasingTime {
-                index,
-                prev: prev.time,
-                time: sample.time,
-            });
-        }
         let mid = mid_terms(
             prev.lat,
             prev.h,
@@ -123,37 +187,22 @@ impl ImuFromTruth {
             self.history.as_ref(),
             dt,
         );
-        let (dth_prev, dv_prev) = match &self.prev_increment {
-            Some(p) => (p.delta_theta, p.delta_v),
-            None => (Vector3::zeros(), Vector3::zeros()),
-        };
-
-        // Attitude: phi, then undo the coning correction.
+        // Attitude: phi of the body rotation (the frame rotation zeta removed).
         let body_rot = prev.nav_from_body.inverse()
             * quat_from_rotation_vector(&mid.zeta)
             * sample.nav_from_body;
         let phi = rotation_vector_from_quat(&body_rot);
-        let dth = solve_i_plus_skew(&(dth_prev / 12.0), &phi);
-
-        // Velocity: undo gravity/Coriolis, the frame rotations, then rotation and
-        // sculling compensation.
+        // Velocity: gravity/Coriolis and the frame rotations undone.
         let dv_sf_nav = sample.vel_in_nav - prev.vel_in_nav - mid.dv_grav_cor;
         let u = prev.nav_from_body.inverse()
             * (quat_from_rotation_vector(&(mid.zeta * 0.5)) * dv_sf_nav);
-        let rhs = u - dv_prev.cross(&dth) / 12.0;
-        let a = dth * 0.5 + dth_prev / 12.0;
-        let dv = solve_i_plus_skew(&a, &rhs);
-
-        let inc = ImuIncrement::new(dt, dth, dv);
+        let inc = self.step.advance(sample, dt, &phi, &u);
         self.history = Some(NavHistory {
             lat: prev.lat,
             h: prev.h,
             vel: prev.vel_in_nav,
             dt,
         });
-        self.prev = Some(*sample);
-        self.prev_increment = Some(inc);
-        self.index += 1;
         Ok(Some(inc))
     }
 }

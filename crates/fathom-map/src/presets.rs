@@ -17,28 +17,53 @@ pub const MAX_PIERS_PER_ROW: usize = 10_000;
 
 /// Dimensions of the `bridge` world (m). The deck runs north from `north = 0`; the
 /// pier rows stand at `east = +-pier_row_offset_m`; the path runs north at `east = 0`.
+///
+/// Also the `urban` scenario's `[scenarios.world.bridge]` table (every key required,
+/// no other key): with the `schemars` feature it has a JSON schema.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
+#[serde(deny_unknown_fields)]
 pub struct BridgeParams {
     /// Deck length along north. Default 200.
+    ///
+    /// Unit: m. Range: > 0.
     pub deck_length_m: f64,
     /// Deck width along east. Default 20.
+    ///
+    /// Unit: m. Range: > 0.
     pub deck_width_m: f64,
     /// Height of the deck's underside above the ground. Default 10.
+    ///
+    /// Unit: m. Range: > `path_height_m`.
     pub deck_height_m: f64,
     /// Deck thickness. Default 1.5.
+    ///
+    /// Unit: m. Range: > 0.
     pub deck_thickness_m: f64,
-    /// Pier diameter. Default 2.
+    /// Pier diameter (spec: ~2). Default 2.
+    ///
+    /// Unit: m. Range: > 0.
     pub pier_diameter_m: f64,
-    /// Pier spacing along north (the first pier at half a spacing). Default 20.
+    /// Pier spacing along north, the first pier at half a spacing (spec: ~20). Default
+    /// 20.
+    ///
+    /// Unit: m. Range: > `pier_diameter_m`.
     pub pier_spacing_m: f64,
     /// East offset of each pier row from the path (rows at `+-` this). Default 6.
+    ///
+    /// Unit: m. Range: > the pier radius.
     pub pier_row_offset_m: f64,
     /// Facets per pier (prism sides). Default 24.
+    ///
+    /// Range: 3 … 4096.
     pub pier_facets: usize,
     /// Ground margin around the deck. Default 100.
+    ///
+    /// Unit: m. Range: > 0.
     pub ground_margin_m: f64,
     /// Flight height of the path under the deck. Default 5.
+    ///
+    /// Unit: m. Range: > 0.
     pub path_height_m: f64,
 }
 
@@ -204,33 +229,55 @@ impl Bridge {
 /// `(0, 0)`, `(side, 0)`, `(side, side)`, `(0, side)` (north, east) at `path_height_m`;
 /// a central building fills the square less `clearance_m` on each side, and four outer
 /// buildings (`outer_depth_m` deep) stand `clearance_m` outside each leg.
+///
+/// Also the `urban` scenario's `[scenarios.world.buildings]` table (every key
+/// required, no other key): with the `schemars` feature it has a JSON schema.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+#[cfg_attr(feature = "schemars", derive(schemars::JsonSchema))]
+#[serde(deny_unknown_fields)]
 pub struct BuildingsParams {
-    /// Side of the square path. Default 100.
+    /// Side of the square path (spec: ~100). Default 100.
+    ///
+    /// Unit: m. Range: > 2 `clearance_m`.
     pub path_side_m: f64,
-    /// Flight height of the path. Default 20.
+    /// Flight height of the path (spec: ~20). Default 20.
+    ///
+    /// Unit: m. Range: > 0.
     pub path_height_m: f64,
     /// Horizontal distance from the path to every facade. Default 15.
+    ///
+    /// Unit: m. Range: > 0.
     pub clearance_m: f64,
     /// Depth of the outer buildings (away from the path). Default 30.
+    ///
+    /// Unit: m. Range: > 0.
     pub outer_depth_m: f64,
     /// Height of the central building. Default 80.
+    ///
+    /// Unit: m. Range: > 0.
     pub central_height_m: f64,
-    /// Heights of the outer buildings north, east, south, west of the square.
-    /// Default 60, 70, 40, 50.
+    /// Heights of the outer buildings north, east, south, west of the square (spec:
+    /// 40-80). Default 60, 70, 40, 50.
+    ///
+    /// Unit: m. Range: each > 0.
     pub outer_heights_m: [f64; 4],
     /// Whether the facades marked glass are glass (else all opaque). Glass: the
     /// central building's north and east facades, the east building's facade and the
     /// south building's facade facing the path. Default true.
     pub glass_facades: bool,
     /// Ground margin around the outer buildings. Default 100.
+    ///
+    /// Unit: m. Range: > 0.
     pub ground_margin_m: f64,
     /// Buildings per outer side, separated by streets of `street_width_m` (cross
     /// streets give a range sensor along-track features; the gaps open the sky).
     /// Default 1: one continuous building per side.
+    ///
+    /// Range: 1 … 100.
     pub outer_buildings_per_side: usize,
     /// Width of the streets between the outer buildings of a side. Default 10.
+    ///
+    /// Unit: m. Range: > 0, the streets shorter than a side.
     pub street_width_m: f64,
 }
 

@@ -12,102 +12,9 @@
 //! | `truth.csv` | `time[s], north[m], east[m], depth[m], (vel_north[m/s], vel_east[m/s], vel_down[m/s])` | ground truth: north and east from the start position, depth (optional) |
 
 pub use super::DEPTH;
-use super::table::{Check, ColumnSpec as C, FileSpec, Table, TimeOrder};
-use super::units::Quantity::{Acceleration, Angle, AngularRate, Count, Length, Rpm, Speed, Time};
+pub use super::specs::ins_dvl::{ALTITUDE, DVL, IMU, INITIAL, RPM, SPECS, TRUTH};
+use super::specs::ins_dvl::{INCREMENTS, RATES};
 use super::{FileSet, LogError, LogKind, single_row};
-
-/// `initial.csv`.
-pub const INITIAL: FileSpec = FileSpec::timed(
-    "initial.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("latitude", Angle, Check::Latitude),
-        C::required("longitude", Angle, Check::Any),
-        C::required("depth", Length, Check::Any),
-        C::required("vel_north", Speed, Check::Any),
-        C::required("vel_east", Speed, Check::Any),
-        C::required("vel_down", Speed, Check::Any),
-        C::required("roll", Angle, Check::Any),
-        C::required("pitch", Angle, Check::Any),
-        C::required("heading", Angle, Check::Any),
-    ],
-);
-
-/// The IMU increment columns.
-const INCREMENTS: &[&str] = &["dtheta_x", "dtheta_y", "dtheta_z", "dv_x", "dv_y", "dv_z"];
-/// The IMU rate columns.
-const RATES: &[&str] = &[
-    "gyro_x", "gyro_y", "gyro_z", "accel_x", "accel_y", "accel_z",
-];
-
-/// `imu.csv`: increments or mean rates over (previous row, this row].
-pub const IMU: FileSpec = FileSpec {
-    file: "imu.csv",
-    columns: &[
-        C::required("time", Time, Check::Any),
-        C::required("dtheta_x", Angle, Check::Any),
-        C::required("dtheta_y", Angle, Check::Any),
-        C::required("dtheta_z", Angle, Check::Any),
-        C::required("dv_x", Speed, Check::Any),
-        C::required("dv_y", Speed, Check::Any),
-        C::required("dv_z", Speed, Check::Any),
-        C::required("gyro_x", AngularRate, Check::Any),
-        C::required("gyro_y", AngularRate, Check::Any),
-        C::required("gyro_z", AngularRate, Check::Any),
-        C::required("accel_x", Acceleration, Check::Any),
-        C::required("accel_y", Acceleration, Check::Any),
-        C::required("accel_z", Acceleration, Check::Any),
-    ],
-    groups: &[INCREMENTS, RATES],
-    time: TimeOrder::Increasing,
-};
-
-/// `dvl.csv` (body-frame velocity: x forward, y right, z down).
-pub const DVL: FileSpec = FileSpec::timed(
-    "dvl.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("u", Speed, Check::Any),
-        C::required("v", Speed, Check::Any),
-        C::required("w", Speed, Check::Any),
-        C::optional("bottom_lock", Count, Check::Flag),
-    ],
-);
-
-/// `altitude.csv` (echo sounder).
-pub const ALTITUDE: FileSpec = FileSpec::timed(
-    "altitude.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("altitude", Length, Check::NonNegative),
-    ],
-);
-
-/// `rpm.csv`.
-pub const RPM: FileSpec = FileSpec::timed(
-    "rpm.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("rpm", Rpm, Check::Any),
-    ],
-);
-
-/// `truth.csv` (north and east from the start position, depth).
-pub const TRUTH: FileSpec = FileSpec::timed(
-    "truth.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("north", Length, Check::Any),
-        C::required("east", Length, Check::Any),
-        C::required("depth", Length, Check::Any),
-        C::optional("vel_north", Speed, Check::Any),
-        C::optional("vel_east", Speed, Check::Any),
-        C::optional("vel_down", Speed, Check::Any),
-    ],
-);
-
-/// Every file of the kind.
-pub const SPECS: [FileSpec; 7] = [INITIAL, IMU, DVL, DEPTH, ALTITUDE, RPM, TRUTH];
 
 /// The INS start.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -180,22 +87,6 @@ pub struct InsDvlLog {
     pub truth: Option<Vec<InsTruthRow>>,
 }
 
-fn pairs(t: &Table, col: &str) -> Vec<(f64, f64)> {
-    t.column("time")
-        .iter()
-        .copied()
-        .zip(t.column(col).iter().copied())
-        .collect()
-}
-
-fn triple(t: &Table, k: usize, cols: &[&str]) -> [f64; 3] {
-    [
-        t.column(cols[0])[k],
-        t.column(cols[1])[k],
-        t.column(cols[2])[k],
-    ]
-}
-
 impl InsDvlLog {
     /// Parses the files of `set` (an `ins-dvl` log) and checks that they fit together.
     ///
@@ -205,15 +96,7 @@ impl InsDvlLog {
     /// one row, an `imu.csv` with fewer than two rows after the start, truth velocity
     /// columns that are not all three present.
     pub fn parse(set: &FileSet) -> Result<Self, LogError> {
-        if set.manifest.kind != LogKind::InsDvl {
-            return Err(LogError::Manifest {
-                path: set.path(super::MANIFEST),
-                reason: format!(
-                    "key `kind`: this is a `{}` log, not an `ins-dvl` log",
-                    set.manifest.kind.name()
-                ),
-            });
-        }
+        set.expect_kind(LogKind::InsDvl)?;
         let init = set.required(
             &INITIAL,
             "the INS start (time, position, velocity, attitude)",
@@ -223,8 +106,8 @@ impl InsDvlLog {
             time: init.column("time")[0],
             lat_lon: [init.column("latitude")[0], init.column("longitude")[0]],
             depth: init.column("depth")[0],
-            vel_in_nav: triple(&init, 0, &["vel_north", "vel_east", "vel_down"]),
-            euler: triple(&init, 0, &["roll", "pitch", "heading"]),
+            vel_in_nav: init.triple(0, ["vel_north", "vel_east", "vel_down"]),
+            euler: init.triple(0, ["roll", "pitch", "heading"]),
         };
         let imu_t = set.required(&IMU, "the IMU output")?;
         let imu_form = if imu_t.has("dtheta_x") {
@@ -240,8 +123,8 @@ impl InsDvlLog {
             .map(|k| {
                 (
                     imu_t.column("time")[k],
-                    triple(&imu_t, k, &cols[..3]),
-                    triple(&imu_t, k, &cols[3..]),
+                    imu_t.triple(k, [cols[0], cols[1], cols[2]]),
+                    imu_t.triple(k, [cols[3], cols[4], cols[5]]),
                 )
             })
             .collect();
@@ -260,7 +143,7 @@ impl InsDvlLog {
         let dvl = (0..dvl_t.len())
             .map(|k| DvlRow {
                 time: dvl_t.column("time")[k],
-                vel_in_body: triple(&dvl_t, k, &["u", "v", "w"]),
+                vel_in_body: dvl_t.triple(k, ["u", "v", "w"]),
                 bottom_lock: lock.map(|l| l[k] == 1.0),
             })
             .collect();
@@ -281,8 +164,8 @@ impl InsDvlLog {
                     (0..t.len())
                         .map(|k| InsTruthRow {
                             time: t.column("time")[k],
-                            pos_in_nav: triple(&t, k, &["north", "east", "depth"]),
-                            vel_in_nav: (n == 3).then(|| triple(&t, k, &vel)),
+                            pos_in_nav: t.triple(k, ["north", "east", "depth"]),
+                            vel_in_nav: (n == 3).then(|| t.triple(k, vel)),
                         })
                         .collect(),
                 )
@@ -293,9 +176,9 @@ impl InsDvlLog {
             imu_form,
             imu,
             dvl,
-            depth: set.table(&DEPTH)?.map(|t| pairs(&t, "depth")),
-            altitude: set.table(&ALTITUDE)?.map(|t| pairs(&t, "altitude")),
-            rpm: set.table(&RPM)?.map(|t| pairs(&t, "rpm")),
+            depth: set.table(&DEPTH)?.map(|t| t.series("depth")),
+            altitude: set.table(&ALTITUDE)?.map(|t| t.series("altitude")),
+            rpm: set.table(&RPM)?.map(|t| t.series("rpm")),
             truth,
         })
     }
@@ -310,7 +193,7 @@ impl InsDvlLog {
 
     /// The log's files as CSV texts in SI units (what [`super::write_log`] writes).
     pub fn to_files(&self) -> Vec<(&'static str, String)> {
-        use super::csv_text;
+        use super::{csv_text, series_text};
         let s = &self.start;
         let mut out = vec![(
             INITIAL.file,
@@ -394,10 +277,7 @@ impl InsDvlLog {
             (RPM, "rpm[rpm]", &self.rpm),
         ] {
             if let Some(rows) = rows {
-                out.push((
-                    spec.file,
-                    csv_text(&["time[s]", header], rows.iter().map(|r| vec![r.0, r.1])),
-                ));
+                out.push((spec.file, series_text(header, rows)));
             }
         }
         if let Some(truth) = &self.truth {
@@ -426,18 +306,10 @@ impl InsDvlLog {
 
 #[cfg(test)]
 mod tests {
-    use super::super::Manifest;
     use super::*;
 
     fn set(files: &[(&'static str, &str)]) -> FileSet {
-        FileSet {
-            dir: "log".into(),
-            manifest: Manifest::new(LogKind::InsDvl, ""),
-            files: files
-                .iter()
-                .map(|(n, t)| (*n, t.as_bytes().to_vec()))
-                .collect(),
-        }
+        super::super::tests::file_set(LogKind::InsDvl, files)
     }
 
     const INIT: &str = "time[s],latitude[deg],longitude[deg],depth[m],vel_north[m/s],vel_east[m/s],vel_down[m/s],roll[deg],pitch[deg],heading[deg]\n0,35,129,50,1,0,0,0,0,90\n";

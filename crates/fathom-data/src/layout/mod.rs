@@ -19,6 +19,7 @@ pub mod convert;
 pub mod error;
 pub mod ins_dvl;
 pub mod range_beacon;
+mod specs;
 pub mod table;
 pub mod units;
 
@@ -26,17 +27,9 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 pub use error::{Cell, LogError};
+pub use specs::DEPTH;
 pub use table::{Check, ColumnSpec, FileSpec, Table, TimeOrder, expected_header, parse_table};
 pub use units::Quantity;
-
-/// `depth.csv` (down positive), shared by both kinds.
-pub const DEPTH: FileSpec = FileSpec::timed(
-    "depth.csv",
-    &[
-        ColumnSpec::required("time", Quantity::Time, Check::Any),
-        ColumnSpec::required("depth", Quantity::Length, Check::Any),
-    ],
-);
 
 /// The manifest's file name.
 pub const MANIFEST: &str = "log.toml";
@@ -62,6 +55,14 @@ impl LogKind {
         match self {
             LogKind::RangeBeacon => "range-beacon",
             LogKind::InsDvl => "ins-dvl",
+        }
+    }
+
+    /// `a `range-beacon` log` / `an `ins-dvl` log`, for messages.
+    pub fn a_log(self) -> &'static str {
+        match self {
+            LogKind::RangeBeacon => "a `range-beacon` log",
+            LogKind::InsDvl => "an `ins-dvl` log",
         }
     }
 
@@ -221,6 +222,24 @@ impl FileSet {
         })
     }
 
+    /// Checks that the manifest says `kind` (what the parser of that kind reads).
+    ///
+    /// # Errors
+    /// [`LogError::Manifest`] naming the key `kind` and both kinds.
+    pub fn expect_kind(&self, kind: LogKind) -> Result<(), LogError> {
+        if self.manifest.kind == kind {
+            return Ok(());
+        }
+        Err(LogError::Manifest {
+            path: self.path(MANIFEST),
+            reason: format!(
+                "key `kind`: this is a `{}` log, not {}",
+                self.manifest.kind.name(),
+                kind.a_log()
+            ),
+        })
+    }
+
     /// The path of file `name` in the folder (for messages).
     pub fn path(&self, name: &str) -> PathBuf {
         self.dir.join(name)
@@ -305,6 +324,14 @@ pub fn csv_text(header: &[&str], rows: impl IntoIterator<Item = Vec<f64>>) -> St
     String::from_utf8_lossy(&out).into_owned()
 }
 
+/// The CSV text of a `(time, value)` file: header `time[s]` and `value_header`.
+pub fn series_text(value_header: &str, rows: &[(f64, f64)]) -> String {
+    csv_text(
+        &["time[s]", value_header],
+        rows.iter().map(|r| vec![r.0, r.1]),
+    )
+}
+
 /// Writes a log folder: the manifest and the given `(file name, CSV text)` files.
 /// Creates `dir`; refuses a folder that already holds a `log.toml` or any of the
 /// files (a log is never overwritten).
@@ -341,8 +368,21 @@ pub fn write_log(
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// A file set of `kind` in the folder `log` from `(file name, text)` pairs (the
+    /// parsers' tests).
+    pub(crate) fn file_set(kind: LogKind, files: &[(&'static str, &str)]) -> FileSet {
+        FileSet {
+            dir: "log".into(),
+            manifest: Manifest::new(kind, ""),
+            files: files
+                .iter()
+                .map(|(n, t)| (*n, t.as_bytes().to_vec()))
+                .collect(),
+        }
+    }
 
     #[test]
     fn manifest_round_trip_and_errors_name_the_key() {

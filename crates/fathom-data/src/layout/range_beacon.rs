@@ -18,93 +18,10 @@
 use std::collections::BTreeMap;
 
 pub use super::DEPTH;
-use super::table::{Check, ColumnSpec as C, FileSpec, Table, TimeOrder};
-use super::units::Quantity::{Angle, Count, Length, Speed, Time};
+pub use super::specs::range_beacon::{
+    BEACONS, DVL, HEADING, INITIAL, ODOMETRY, RANGES, SPECS, TRUTH,
+};
 use super::{FileSet, LogError, LogKind, single_row};
-
-/// `beacons.csv`.
-pub const BEACONS: FileSpec = FileSpec {
-    file: "beacons.csv",
-    columns: &[
-        C::required("id", Count, Check::Integer),
-        C::required("north", Length, Check::Any),
-        C::required("east", Length, Check::Any),
-        C::optional("down", Length, Check::Any),
-    ],
-    groups: &[],
-    time: TimeOrder::NoTime,
-};
-
-/// `initial.csv`.
-pub const INITIAL: FileSpec = FileSpec::timed(
-    "initial.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("north", Length, Check::Any),
-        C::required("east", Length, Check::Any),
-        C::optional("down", Length, Check::Any),
-        C::required("heading", Angle, Check::Any),
-    ],
-);
-
-/// `odometry.csv`.
-pub const ODOMETRY: FileSpec = FileSpec::timed(
-    "odometry.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("distance", Length, Check::Any),
-        C::required("heading_change", Angle, Check::Any),
-    ],
-);
-
-/// `dvl.csv` (body-frame velocity: x forward, y right, z down).
-pub const DVL: FileSpec = FileSpec::timed(
-    "dvl.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("u", Speed, Check::Any),
-        C::required("v", Speed, Check::Any),
-        C::required("w", Speed, Check::Any),
-    ],
-);
-
-/// `heading.csv` (clockwise from north).
-pub const HEADING: FileSpec = FileSpec::timed(
-    "heading.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("heading", Angle, Check::Any),
-    ],
-);
-
-/// `ranges.csv` (several beacons may share a stamp).
-pub const RANGES: FileSpec = FileSpec {
-    file: "ranges.csv",
-    columns: &[
-        C::required("time", Time, Check::Any),
-        C::required("beacon", Count, Check::Integer),
-        C::required("range", Length, Check::NonNegative),
-    ],
-    groups: &[],
-    time: TimeOrder::NonDecreasing,
-};
-
-/// `truth.csv`.
-pub const TRUTH: FileSpec = FileSpec::timed(
-    "truth.csv",
-    &[
-        C::required("time", Time, Check::Any),
-        C::required("north", Length, Check::Any),
-        C::required("east", Length, Check::Any),
-        C::optional("down", Length, Check::Any),
-        C::optional("heading", Angle, Check::Any),
-    ],
-);
-
-/// Every file of the kind.
-pub const SPECS: [FileSpec; 8] = [
-    BEACONS, INITIAL, ODOMETRY, DVL, HEADING, RANGES, DEPTH, TRUTH,
-];
 
 /// A beacon of the table.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -189,14 +106,6 @@ pub struct RangeBeaconLog {
     pub truth: Option<Vec<TruthRow>>,
 }
 
-fn rows1(t: &Table, col: &str) -> Vec<Sample> {
-    t.column("time")
-        .iter()
-        .copied()
-        .zip(t.column(col).iter().copied())
-        .collect()
-}
-
 impl RangeBeaconLog {
     /// Parses the files of `set` (a `range-beacon` log) and checks that they fit
     /// together (module docs).
@@ -207,15 +116,7 @@ impl RangeBeaconLog {
     /// `initial.csv` without exactly one row, a duplicate beacon id, an unknown beacon
     /// id in `ranges.csv`.
     pub fn parse(set: &FileSet) -> Result<Self, LogError> {
-        if set.manifest.kind != LogKind::RangeBeacon {
-            return Err(LogError::Manifest {
-                path: set.path(super::MANIFEST),
-                reason: format!(
-                    "key `kind`: this is a `{}` log, not a `range-beacon` log",
-                    set.manifest.kind.name()
-                ),
-            });
-        }
+        set.expect_kind(LogKind::RangeBeacon)?;
         let inconsistent = |file: &str, reason: String| LogError::Inconsistent {
             path: set.path(file),
             reason,
@@ -279,14 +180,9 @@ impl RangeBeaconLog {
                 let h = set.required(&HEADING, "heading")?;
                 Motion::Dvl {
                     dvl: (0..d.len())
-                        .map(|k| {
-                            (
-                                d.column("time")[k],
-                                [d.column("u")[k], d.column("v")[k], d.column("w")[k]],
-                            )
-                        })
+                        .map(|k| (d.column("time")[k], d.triple(k, ["u", "v", "w"])))
                         .collect(),
-                    heading: rows1(&h, "heading"),
+                    heading: h.series("heading"),
                 }
             }
             (false, true, false) => {
@@ -361,7 +257,7 @@ impl RangeBeaconLog {
             });
         }
 
-        let depth = set.table(&DEPTH)?.map(|t| rows1(&t, "depth"));
+        let depth = set.table(&DEPTH)?.map(|t| t.series("depth"));
         if odometry && depth.is_some() {
             return Err(inconsistent(
                 DEPTH.file,
@@ -400,7 +296,7 @@ impl RangeBeaconLog {
 
     /// The log's files as CSV texts in SI units (what [`super::write_log`] writes).
     pub fn to_files(&self) -> Vec<(&'static str, String)> {
-        use super::csv_text;
+        use super::{csv_text, series_text};
         let mut out = Vec::new();
         let b_header: &[&str] = if self.beacons_have_down {
             &["id", "north[m]", "east[m]", "down[m]"]
@@ -450,13 +346,7 @@ impl RangeBeaconLog {
                         dvl.iter().map(|r| vec![r.0, r.1[0], r.1[1], r.1[2]]),
                     ),
                 ));
-                out.push((
-                    HEADING.file,
-                    csv_text(
-                        &["time[s]", "heading[rad]"],
-                        heading.iter().map(|r| vec![r.0, r.1]),
-                    ),
-                ));
+                out.push((HEADING.file, series_text("heading[rad]", heading)));
             }
         }
         out.push((
@@ -469,13 +359,7 @@ impl RangeBeaconLog {
             ),
         ));
         if let Some(depth) = &self.depth {
-            out.push((
-                DEPTH.file,
-                csv_text(
-                    &["time[s]", "depth[m]"],
-                    depth.iter().map(|r| vec![r.0, r.1]),
-                ),
-            ));
+            out.push((DEPTH.file, series_text("depth[m]", depth)));
         }
         if let Some(truth) = &self.truth {
             let down = truth.first().is_some_and(|r| r.down.is_some());
@@ -514,14 +398,7 @@ mod tests {
     use super::*;
 
     fn set(files: &[(&'static str, &str)]) -> FileSet {
-        FileSet {
-            dir: "log".into(),
-            manifest: Manifest::new(LogKind::RangeBeacon, ""),
-            files: files
-                .iter()
-                .map(|(n, t)| (*n, t.as_bytes().to_vec()))
-                .collect(),
-        }
+        super::super::tests::file_set(LogKind::RangeBeacon, files)
     }
 
     fn odometry_log() -> Vec<(&'static str, &'static str)> {

@@ -171,6 +171,26 @@ impl Table {
     pub fn unit(&self, name: &str) -> Option<&'static str> {
         self.present[self.index(name)].map(|(_, u)| u.spelling)
     }
+
+    /// The rows as `(time, value of column name)` in SI.
+    ///
+    /// # Panics
+    /// As [`Table::column`] (also for a file without a `time` column).
+    pub fn series(&self, name: &str) -> Vec<(f64, f64)> {
+        self.column("time")
+            .iter()
+            .copied()
+            .zip(self.column(name).iter().copied())
+            .collect()
+    }
+
+    /// Row `row`'s values of the three columns `names` (a vector's components).
+    ///
+    /// # Panics
+    /// As [`Table::column`], or for a row out of range.
+    pub fn triple(&self, row: usize, names: [&str; 3]) -> [f64; 3] {
+        names.map(|name| self.column(name)[row])
+    }
 }
 
 fn header_text(name: &str, unit: &str) -> String {

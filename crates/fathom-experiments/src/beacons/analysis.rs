@@ -42,15 +42,6 @@ pub(super) struct SchemeTable {
 /// `table[case][scheme]`.
 pub(super) type Table = Vec<Vec<SchemeTable>>;
 
-/// Index of the main case (the check guarantees it exists).
-pub(super) fn main_case(checked: &Checked) -> usize {
-    checked
-        .cases
-        .iter()
-        .position(|c| c.name == MAIN_CASE)
-        .unwrap_or(0)
-}
-
 /// The aggregated statistics of scheme `si` on case `ci` of `per_run`.
 fn aggregate(
     per_run: &[Vec<Vec<KeptStats>>],
@@ -247,7 +238,7 @@ fn smoothed_rows(
             table.push((ci, scheme, m, aggs, filtered_mean, d.mean, d.bounds()));
         }
     }
-    let main = main_case(checked);
+    let main = checked.main_case();
     let on_main: Vec<_> = table.iter().filter(|t| t.0 == main).collect();
     out.claim(Claim::new(
         "smoothing_lowers_mean_error",
@@ -329,7 +320,7 @@ fn claims(
     out: &mut Analysis,
 ) -> Result<(), SimError> {
     let case_index = |name: &str| checked.cases.iter().position(|c| c.name == name);
-    let main = main_case(checked);
+    let main = checked.main_case();
     // "SC is best": the paired 95 % CIs of SC - AS and SC - SI both below zero.
     let best = |k: usize, g: fn(&KeptStats) -> f64| -> Result<(bool, String), SimError> {
         let v: Vec<f64> = (0..3).map(|si| table[main][si].stats[k].mean).collect();

@@ -4,9 +4,9 @@
 
 use fathom_sensors::BeaconSuiteData;
 use fathom_traj::Trajectory;
+use fathom_traj::velocity_command::VelocityCommandMotion;
 
-use super::analysis::main_case;
-use super::run::RunDetail;
+use super::filter::SchemeRun;
 use super::scenario::Checked;
 use fathom_sim::SimError;
 
@@ -41,29 +41,32 @@ pub(super) struct FigureDetail {
     pub(super) sample_rows: Vec<(String, Vec<f64>)>,
 }
 
-/// The figure detail of a simulated run.
+/// The figure detail of a simulated run: its `motion` and, per case, the sensor data
+/// and the schemes' results.
 ///
 /// # Errors
 /// A truth sample outside the motion (not expected: the evaluation instants are inside
 /// it).
-pub(super) fn figure_detail(checked: &Checked, run: &RunDetail) -> Result<FigureDetail, SimError> {
-    let main = main_case(checked);
-    let (data, runs) = &run.cases[main];
+pub(super) fn figure_detail(
+    checked: &Checked,
+    motion: &VelocityCommandMotion,
+    cases: &[(BeaconSuiteData, Vec<SchemeRun>)],
+) -> Result<FigureDetail, SimError> {
+    let main = checked.main_case();
+    let (data, runs) = &cases[main];
     let shown = checked
         .schemes
         .iter()
         .position(|s| s.short_name() == "SC")
         .unwrap_or(0);
-    let actual = run
-        .motion
+    let actual = motion
         .samples()
         .iter()
         .map(|s| [s.time, s.pos_in_nav.x, s.pos_in_nav.y, s.pos_in_nav.z])
         .collect();
     let mut truth_at_eval = Vec::with_capacity(runs[shown].times.len());
     for &t in &runs[shown].times {
-        let s = run
-            .motion
+        let s = motion
             .state_at(t)
             .map_err(|e| SimError::model("truth", e))?;
         truth_at_eval.push([
@@ -88,7 +91,7 @@ pub(super) fn figure_detail(checked: &Checked, run: &RunDetail) -> Result<Figure
     let mut sample_rows = Vec::new();
     sample_rows_of(data, "async: ", &mut sample_rows);
     if let Some(si) = checked.cases.iter().position(|c| c.config.is_synchronous()) {
-        let d = &run.cases[si].0;
+        let d = &cases[si].0;
         sample_rows.push((
             "sync: all sensors".into(),
             in_window(d.depth.iter().map(|m| m.sample_time)),

@@ -4,7 +4,6 @@
 
 use fathom_traj::velocity_command::VelocityCommandMotion;
 
-use super::analysis::main_case;
 use super::detail::SAMPLE_WINDOW;
 use super::run::{BatchSums, KeptStats};
 use super::scenario::Checked;
@@ -88,7 +87,7 @@ pub(super) fn write(
             format!("run {} carried no figure detail", checked.figure_run),
         )
     })?;
-    let main = main_case(checked);
+    let main = checked.main_case();
     let commanded = VelocityCommandMotion::commanded(
         &checked
             .motion

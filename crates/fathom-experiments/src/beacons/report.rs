@@ -8,7 +8,7 @@ use fathom_sensors::Timing;
 use fathom_stats::paired_mean_ci;
 
 use super::analysis::SchemeTable;
-use super::analysis::{Table, main_case};
+use super::analysis::Table;
 use super::paper::{PAPER_INJECTED, PAPER_TABLE13, PAPER_TABLE14};
 use super::run::{BatchSums, KeptStats};
 use super::scenario::Checked;
@@ -65,7 +65,7 @@ pub(super) fn write(
     layouts: &Table,
     out: &mut Analysis,
 ) {
-    let main = main_case(checked);
+    let main = checked.main_case();
     out.report(&table13(checked, table, main));
     out.report(&geometry(checked, table, layouts, main));
     out.report(&table14(checked, table, sums, main));

@@ -83,7 +83,7 @@ pub(super) fn one_run(
     let run = simulate_run(checked, rng)?;
     // The figure run keeps what its figures draw (the detail run).
     let figure = if index == checked.figure_run {
-        Some(Box::new(figure_detail(checked, &run)?))
+        Some(Box::new(figure_detail(checked, &run.motion, &run.cases)?))
     } else {
         None
     };

@@ -261,6 +261,16 @@ pub struct Checked {
     pub(super) schemes: Vec<UpdateScheme>,
 }
 
+impl Checked {
+    /// Index of the main case (the check guarantees it exists).
+    pub(super) fn main_case(&self) -> usize {
+        self.cases
+            .iter()
+            .position(|c| c.name == super::MAIN_CASE)
+            .unwrap_or(0)
+    }
+}
+
 impl BeaconsScenario {
     /// The layouts of `[[geometry]]`, each the main case with its own beacons.
     fn check_layouts(

@@ -2,8 +2,6 @@
 //! preset world's dimensions or the user's mesh file settings, and the waypoints.
 
 use super::scenario::AxesToml;
-use super::scenario::BridgeToml;
-use super::scenario::BuildingsToml;
 use super::scenario::PresetWorld;
 use super::scenario::Ranging;
 use super::scenario::SceneToml;
@@ -54,38 +52,12 @@ pub(super) fn model_err(file: &str, key: &str, e: impl std::fmt::Display) -> Sim
     SimError::invalid(file, key, e.to_string())
 }
 
-fn bridge(file: &str, key: &str, b: &BridgeToml) -> Result<Bridge, SimError> {
-    BridgeParams {
-        deck_length_m: b.deck_length_m,
-        deck_width_m: b.deck_width_m,
-        deck_height_m: b.deck_height_m,
-        deck_thickness_m: b.deck_thickness_m,
-        pier_diameter_m: b.pier_diameter_m,
-        pier_spacing_m: b.pier_spacing_m,
-        pier_row_offset_m: b.pier_row_offset_m,
-        pier_facets: b.pier_facets,
-        ground_margin_m: b.ground_margin_m,
-        path_height_m: b.path_height_m,
-    }
-    .check()
-    .map_err(|e| model_err(file, key, e))
+fn bridge(file: &str, key: &str, b: &BridgeParams) -> Result<Bridge, SimError> {
+    b.check().map_err(|e| model_err(file, key, e))
 }
 
-fn buildings(file: &str, key: &str, b: &BuildingsToml) -> Result<Buildings, SimError> {
-    BuildingsParams {
-        path_side_m: b.path_side_m,
-        path_height_m: b.path_height_m,
-        clearance_m: b.clearance_m,
-        outer_depth_m: b.outer_depth_m,
-        central_height_m: b.central_height_m,
-        outer_heights_m: b.outer_heights_m,
-        glass_facades: b.glass_facades,
-        ground_margin_m: b.ground_margin_m,
-        outer_buildings_per_side: b.outer_buildings_per_side,
-        street_width_m: b.street_width_m,
-    }
-    .check()
-    .map_err(|e| model_err(file, key, e))
+fn buildings(file: &str, key: &str, b: &BuildingsParams) -> Result<Buildings, SimError> {
+    b.check().map_err(|e| model_err(file, key, e))
 }
 
 pub(super) fn scene(
@@ -117,12 +89,12 @@ pub(super) fn scene(
         (Some(PresetWorld::Bridge), None) => WorldSource::Bridge(bridge(
             file,
             &key("world.bridge"),
-            &w.bridge.unwrap_or_else(default_bridge),
+            &w.bridge.unwrap_or_default(),
         )?),
         (Some(PresetWorld::Buildings), None) => WorldSource::Buildings(buildings(
             file,
             &key("world.buildings"),
-            &w.buildings.unwrap_or_else(default_buildings),
+            &w.buildings.unwrap_or_default(),
         )?),
         (None, Some(path)) => {
             if path.trim().is_empty() {
@@ -214,36 +186,4 @@ pub(super) fn scene(
         start_height,
         paper,
     })
-}
-
-fn default_bridge() -> BridgeToml {
-    let p = BridgeParams::default();
-    BridgeToml {
-        deck_length_m: p.deck_length_m,
-        deck_width_m: p.deck_width_m,
-        deck_height_m: p.deck_height_m,
-        deck_thickness_m: p.deck_thickness_m,
-        pier_diameter_m: p.pier_diameter_m,
-        pier_spacing_m: p.pier_spacing_m,
-        pier_row_offset_m: p.pier_row_offset_m,
-        pier_facets: p.pier_facets,
-        ground_margin_m: p.ground_margin_m,
-        path_height_m: p.path_height_m,
-    }
-}
-
-fn default_buildings() -> BuildingsToml {
-    let p = BuildingsParams::default();
-    BuildingsToml {
-        path_side_m: p.path_side_m,
-        path_height_m: p.path_height_m,
-        clearance_m: p.clearance_m,
-        outer_depth_m: p.outer_depth_m,
-        central_height_m: p.central_height_m,
-        outer_heights_m: p.outer_heights_m,
-        glass_facades: p.glass_facades,
-        ground_margin_m: p.ground_margin_m,
-        outer_buildings_per_side: p.outer_buildings_per_side,
-        street_width_m: p.street_width_m,
-    }
 }

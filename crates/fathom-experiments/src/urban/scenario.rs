@@ -1,6 +1,7 @@
 //! The `urban` scenario file (`scenarios/urban.toml`): its schema. The conversion
 //! into checked library types is in [`super::check`].
 
+use fathom_map::presets::{BridgeParams, BuildingsParams};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -536,104 +537,10 @@ pub struct WorldToml {
     pub origin_offset: Option<[f64; 3]>,
     /// Dimensions of the `bridge` preset.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub bridge: Option<BridgeToml>,
+    pub bridge: Option<BridgeParams>,
     /// Dimensions of the `buildings` preset.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub buildings: Option<BuildingsToml>,
-}
-
-/// `[scenarios.world.bridge]`: the deck runs north from `north = 0`, the pier rows
-/// stand at `east = ±pier_row_offset_m`, the ground is `z = 0`.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct BridgeToml {
-    /// Deck length along north.
-    ///
-    /// Unit: m. Range: > 0.
-    pub deck_length_m: f64,
-    /// Deck width along east.
-    ///
-    /// Unit: m. Range: > 0.
-    pub deck_width_m: f64,
-    /// Height of the deck's underside above the ground.
-    ///
-    /// Unit: m. Range: > `path_height_m`.
-    pub deck_height_m: f64,
-    /// Deck thickness.
-    ///
-    /// Unit: m. Range: > 0.
-    pub deck_thickness_m: f64,
-    /// Pier diameter (spec: ~2).
-    ///
-    /// Unit: m. Range: > 0.
-    pub pier_diameter_m: f64,
-    /// Pier spacing along north (spec: ~20).
-    ///
-    /// Unit: m. Range: > `pier_diameter_m`.
-    pub pier_spacing_m: f64,
-    /// East offset of each pier row from the path.
-    ///
-    /// Unit: m. Range: > the pier radius.
-    pub pier_row_offset_m: f64,
-    /// Facets per pier.
-    ///
-    /// Range: 3 … 4096.
-    pub pier_facets: usize,
-    /// Ground margin around the deck.
-    ///
-    /// Unit: m. Range: > 0.
-    pub ground_margin_m: f64,
-    /// Flight height of the preset path.
-    ///
-    /// Unit: m. Range: > 0.
-    pub path_height_m: f64,
-}
-
-/// `[scenarios.world.buildings]`: the path is the square `(0, 0)`–`(side, side)`
-/// (north, east); a central building fills it less the clearance, four outer
-/// buildings stand the clearance outside each leg.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct BuildingsToml {
-    /// Side of the square path (spec: ~100).
-    ///
-    /// Unit: m. Range: > 2 `clearance_m`.
-    pub path_side_m: f64,
-    /// Flight height of the path (spec: ~20).
-    ///
-    /// Unit: m. Range: > 0.
-    pub path_height_m: f64,
-    /// Horizontal distance from the path to every facade.
-    ///
-    /// Unit: m. Range: > 0.
-    pub clearance_m: f64,
-    /// Depth of the outer buildings.
-    ///
-    /// Unit: m. Range: > 0.
-    pub outer_depth_m: f64,
-    /// Height of the central building.
-    ///
-    /// Unit: m. Range: > 0.
-    pub central_height_m: f64,
-    /// Heights of the outer buildings north, east, south, west (spec: 40-80).
-    ///
-    /// Unit: m. Range: each > 0.
-    pub outer_heights_m: [f64; 4],
-    /// Whether the glass facades are glass (else all opaque).
-    pub glass_facades: bool,
-    /// Ground margin around the outer buildings.
-    ///
-    /// Unit: m. Range: > 0.
-    pub ground_margin_m: f64,
-    /// Buildings per outer side, separated by cross streets (along-track features
-    /// for the range sensors, gaps in the sky).
-    ///
-    /// Range: 1 … 100.
-    pub outer_buildings_per_side: usize,
-    /// Width of the cross streets.
-    ///
-    /// Unit: m. Range: > 0, the streets shorter than a side.
-    pub street_width_m: f64,
+    pub buildings: Option<BuildingsParams>,
 }
 
 /// `[scenarios.path]`.

@@ -2,10 +2,8 @@
 //! into the checked parameter types of the library crates.
 
 use fathom_estimators::GateThreshold;
-use fathom_estimators::integrated_nav::{AccelBiasFrame, IntegratedNavConfig, IntegratedNavParams};
-use fathom_estimators::velocity_filter::{
-    SwitchingBox, VelocityFilterConfig, VelocityFilterParams,
-};
+use fathom_estimators::integrated_nav::IntegratedNavConfig;
+use fathom_estimators::velocity_filter::{SwitchingBox, VelocityFilterConfig};
 use fathom_ins::earth::Geodetic;
 use fathom_ins::route::{Turn, TurningRoute};
 use fathom_sensors::inertial::{ImuErrorSpec, ImuSpecParams};
@@ -330,96 +328,31 @@ pub struct DepthGaugeToml {
     pub sigma_m: f64,
 }
 
-/// `[vkf]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct VkfToml {
-    /// Initial scale-factor estimate (true value: `rpm.k_mps_per_rpm`).
-    ///
-    /// Unit: m/s per rpm. Range: finite.
-    pub sf0: f64,
-    /// Initial bias estimate (true value: `rpm.b_mps`).
-    ///
-    /// Unit: m/s. Range: finite.
-    pub b0: f64,
-    /// Initial forward-speed σ.
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub sigma_speed0_mps: f64,
-    /// Initial scale-factor σ.
-    ///
-    /// Unit: m/s per rpm. Range: > 0.
-    pub sigma_sf0: f64,
-    /// Initial bias σ.
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub sigma_b0_mps: f64,
-    /// Extra forward-speed process noise σ per VKF step (one step per DVL epoch).
-    ///
-    /// Unit: m/s. Range: ≥ 0.
-    pub speed_process_sigma_mps: f64,
-    /// Scale-factor random-walk PSD.
-    ///
-    /// Unit: (m/s/rpm)²/s. Range: ≥ 0.
-    pub sf_rw_psd: f64,
-    /// Bias random-walk PSD.
-    ///
-    /// Unit: (m/s)²/s. Range: ≥ 0.
-    pub bias_rw_psd: f64,
-    /// σ of the DVL forward body speed assumed by the VKF's update.
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub dvl_sigma_mps: f64,
-    /// σ of the lateral and vertical body speeds assumed zero when the switching box
-    /// uses RPM speed (eqs. 11-12).
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub lateral_sigma_mps: f64,
+fathom_replay::vkf_toml! {
+    /// `[vkf]`.
+    pub struct VkfToml {
+        ..
+    }
 }
 
-/// `[nav_filter]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct NavFilterToml {
-    /// Covariance propagation rate of the 9- and 15-state filters (the state runs at
-    /// the IMU rate).
-    ///
-    /// Unit: Hz. Range: divides `route.imu_rate_hz`, a whole multiple of `dvl.rate_hz`.
-    pub covariance_rate_hz: f64,
-    /// White acceleration PSD of the 9-state filter.
-    ///
-    /// Unit: m²/s³. Range: > 0.
-    pub accel_psd: f64,
-    /// Acceleration-bias random-walk PSD of the 9-state filter.
-    ///
-    /// Unit: (m/s²)²/s. Range: ≥ 0.
-    pub accel_bias_rw_psd: f64,
-    /// Initial position σ of the 9-state filters and the ESKF.
-    ///
-    /// Unit: m. Range: > 0.
-    pub sigma0_pos_m: f64,
-    /// Initial velocity σ of the 9-state filters and the ESKF.
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub sigma0_vel_mps: f64,
-    /// Initial acceleration-bias σ of the 9-state filter.
-    ///
-    /// Unit: m/s². Range: > 0.
-    pub sigma0_accel_bias_mps2: f64,
-    /// Frame of the 9-state filter's bias: `"body"` an accelerometer bias (enters as
-    /// `C_b^n b`), `"nav"` a bias of the navigation-frame acceleration input (dominated
-    /// by the uncorrected INS tilt).
-    ///
-    /// Range: `"body"` or `"nav"`.
-    pub accel_bias_frame: String,
-    /// DVL velocity σ assumed by the 9-state filters and the ESKF.
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub dvl_sigma_mps: f64,
-    /// Gate probability of `INS-DVL-gated` (chi-square, 3 degrees of freedom).
-    ///
-    /// Range: (0, 1).
-    pub gate_probability: f64,
+fathom_replay::nav_filter_toml! {
+    /// `[nav_filter]`.
+    pub struct NavFilterToml {
+        /// Covariance propagation rate of the 9- and 15-state filters (the state runs at
+        /// the IMU rate).
+        ///
+        /// Unit: Hz. Range: divides `route.imu_rate_hz`, a whole multiple of `dvl.rate_hz`.
+        pub covariance_rate_hz: f64,
+        ..
+        /// DVL velocity σ assumed by the 9-state filters and the ESKF.
+        ///
+        /// Unit: m/s. Range: > 0.
+        pub dvl_sigma_mps: f64,
+        /// Gate probability of `INS-DVL-gated` (chi-square, 3 degrees of freedom).
+        ///
+        /// Range: (0, 1).
+        pub gate_probability: f64,
+    }
 }
 
 /// `[eskf]`.
@@ -634,24 +567,12 @@ impl VkfScenario {
         let depth_sigma = require_positive(file, "depth_gauge.sigma_m", self.depth_gauge.sigma_m)?;
 
         let k = &self.vkf;
-        let speed_sigma = require_non_negative(
+        require_non_negative(
             file,
             "vkf.speed_process_sigma_mps",
             k.speed_process_sigma_mps,
         )?;
-        let vkf = VelocityFilterParams {
-            speed0: r.initial_speed_mps,
-            sf0: k.sf0,
-            b0: k.b0,
-            sigma0: [k.sigma_speed0_mps, k.sigma_sf0, k.sigma_b0_mps],
-            rpm_sigma: self.rpm.sigma_rpm,
-            speed_process_var: speed_sigma * speed_sigma,
-            sf_rw_psd: k.sf_rw_psd,
-            bias_rw_psd: k.bias_rw_psd,
-            dvl_sigma: k.dvl_sigma_mps,
-        }
-        .check()
-        .map_err(|e| SimError::invalid(file, "vkf", e.to_string()))?;
+        let vkf = k.velocity_filter_config(file, r.initial_speed_mps, self.rpm.sigma_rpm)?;
         let switch = SwitchingBox::new(v.range_m, k.lateral_sigma_mps)
             .map_err(|e| SimError::invalid(file, "vkf.lateral_sigma_mps", e.to_string()))?;
 
@@ -662,24 +583,7 @@ impl VkfScenario {
             r.imu_rate_hz,
             n.covariance_rate_hz,
         )?;
-        let nav = IntegratedNavParams {
-            accel_psd: n.accel_psd,
-            accel_bias_rw_psd: n.accel_bias_rw_psd,
-            sigma0: [n.sigma0_pos_m, n.sigma0_vel_mps, n.sigma0_accel_bias_mps2],
-            bias_frame: match n.accel_bias_frame.as_str() {
-                "body" => AccelBiasFrame::Body,
-                "nav" => AccelBiasFrame::Nav,
-                other => {
-                    return Err(SimError::invalid(
-                        file,
-                        "nav_filter.accel_bias_frame",
-                        format!("must be \"body\" or \"nav\", got {other:?}"),
-                    ));
-                }
-            },
-        }
-        .check()
-        .map_err(|e| SimError::invalid(file, "nav_filter", e.to_string()))?;
+        let nav = n.integrated_nav_config(file)?;
         let filter_dvl_sigma = require_positive(file, "nav_filter.dvl_sigma_mps", n.dvl_sigma_mps)?;
         let gate = GateThreshold::from_chi_square_probability(n.gate_probability, 3)
             .map_err(|e| SimError::invalid(file, "nav_filter.gate_probability", e.to_string()))?;

@@ -20,7 +20,7 @@
 use nalgebra::Vector3;
 
 use crate::error::{InsError, check_finite};
-use crate::imu_from_truth::solve_i_plus_skew;
+use crate::imu_from_truth::InversionStep;
 use crate::rotation::rotation_vector_from_quat;
 use crate::state::ImuIncrement;
 
@@ -31,9 +31,7 @@ use super::LocalTruthSample;
 #[derive(Debug, Clone, PartialEq)]
 pub struct LocalImuFromTruth {
     gravity: f64,
-    prev: Option<LocalTruthSample>,
-    prev_increment: Option<ImuIncrement>,
-    index: usize,
+    step: InversionStep<LocalTruthSample>,
 }
 
 impl LocalImuFromTruth {
@@ -45,9 +43,7 @@ impl LocalImuFromTruth {
         check_finite("gravity", &[gravity])?;
         Ok(Self {
             gravity,
-            prev: None,
-            prev_increment: None,
-            index: 0,
+            step: InversionStep::default(),
         })
     }
 
@@ -60,39 +56,14 @@ impl LocalImuFromTruth {
     pub fn push(&mut self, sample: &LocalTruthSample) -> Result<Option<ImuIncrement>, InsError> {
         check_finite("truth time", &[sample.time])?;
         sample.to_state().check()?;
-        let index = self.index;
-        let Some(prev) = self.prev else {
-            self.prev = Some(*sample);
-            self.index += 1;
+        let Some((prev, dt)) = self.step.interval(sample, |s| s.time)? else {
             return Ok(None);
         };
-        let dt = sample.time - prev.time;
-        if dt.is_nan() || dt <= 0.0 {
-            return Err(InsError::NonIncreasingTime {
-                index,
-                prev: prev.time,
-                time: sample.time,
-            });
-        }
-        let (dth_prev, dv_prev) = match &self.prev_increment {
-            Some(p) => (p.delta_theta, p.delta_v),
-            None => (Vector3::zeros(), Vector3::zeros()),
-        };
         let phi = rotation_vector_from_quat(&(prev.nav_from_body.inverse() * sample.nav_from_body));
-        let dth = solve_i_plus_skew(&(dth_prev / 12.0), &phi);
-
         let dv_sf_nav =
             sample.vel_in_nav - prev.vel_in_nav - Vector3::new(0.0, 0.0, self.gravity * dt);
         let u = prev.nav_from_body.inverse() * dv_sf_nav;
-        let rhs = u - dv_prev.cross(&dth) / 12.0;
-        let a = dth * 0.5 + dth_prev / 12.0;
-        let dv = solve_i_plus_skew(&a, &rhs);
-
-        let inc = ImuIncrement::new(dt, dth, dv);
-        self.prev = Some(*sample);
-        self.prev_increment = Some(inc);
-        self.index += 1;
-        Ok(Some(inc))
+        Ok(Some(self.step.advance(sample, dt, &phi, &u)))
     }
 }
 

@@ -10,6 +10,7 @@
 //! depth update's innovation and NIS are kept ([`Update`]): without truth they are
 //! what the report shows.
 
+pub mod filter_tables;
 mod run;
 mod settings;
 #[cfg(test)]

@@ -5,7 +5,7 @@ use fathom_core::units::{
     deg_per_hour_to_rad_per_s, deg_per_sqrt_hour_to_rad_per_sqrt_s, milli_g_to_mps2,
 };
 use fathom_estimators::GateThreshold;
-use fathom_estimators::integrated_nav::{AccelBiasFrame, IntegratedNavConfig, IntegratedNavParams};
+use fathom_estimators::integrated_nav::IntegratedNavConfig;
 use fathom_estimators::velocity_filter::{SwitchingBox, VelocityFilterParams};
 use fathom_ins::error_model::{BiasModel, ImuErrorModel, ImuErrorParams};
 use schemars::JsonSchema;
@@ -128,91 +128,28 @@ pub struct DepthSigmaToml {
     pub sigma_m: f64,
 }
 
-/// `[vkf]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct VkfTuningToml {
-    /// Initial scale factor: forward speed per rpm.
-    ///
-    /// Unit: m/s per rpm. Range: finite.
-    pub sf0: f64,
-    /// Initial speed offset.
-    ///
-    /// Unit: m/s. Range: finite.
-    pub b0: f64,
-    /// Initial σ of the speed estimate.
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub sigma_speed0_mps: f64,
-    /// Initial σ of the scale factor.
-    ///
-    /// Unit: m/s per rpm. Range: > 0.
-    pub sigma_sf0: f64,
-    /// Initial σ of the offset.
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub sigma_b0_mps: f64,
-    /// Extra forward-speed process noise σ per step.
-    ///
-    /// Unit: m/s. Range: ≥ 0.
-    pub speed_process_sigma_mps: f64,
-    /// Scale-factor random-walk intensity.
-    ///
-    /// Unit: (m/s/rpm)²/s. Range: ≥ 0.
-    pub sf_rw_psd: f64,
-    /// Offset random-walk intensity.
-    ///
-    /// Unit: (m/s)²/s. Range: ≥ 0.
-    pub bias_rw_psd: f64,
-    /// DVL forward-speed noise σ of the VKF update.
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub dvl_sigma_mps: f64,
-    /// σ of the zero lateral and vertical body speed assumed with RPM aiding.
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub lateral_sigma_mps: f64,
-    /// Revolution noise σ of `rpm.csv`.
-    ///
-    /// Unit: rpm. Range: ≥ 0.
-    pub rpm_sigma: f64,
+crate::vkf_toml! {
+    /// `[vkf]`: the `vkf` experiment's keys (their docs name its true values; a log's
+    /// are unknown), and the noise of `rpm.csv`.
+    pub struct VkfTuningToml {
+        ..
+        /// Revolution noise σ of `rpm.csv`.
+        ///
+        /// Unit: rpm. Range: ≥ 0.
+        pub rpm_sigma: f64,
+    }
 }
 
-/// `[nav_filter]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct NavTuningToml {
-    /// The filters' covariances are propagated every this many seconds of IMU data
-    /// (and before every update); the states at every IMU row.
-    ///
-    /// Unit: s. Range: > 0.
-    pub covariance_period_s: f64,
-    /// White acceleration noise PSD on the velocity.
-    ///
-    /// Unit: m²/s³. Range: > 0.
-    pub accel_psd: f64,
-    /// Acceleration-bias random-walk PSD.
-    ///
-    /// Unit: (m/s²)²/s. Range: ≥ 0.
-    pub accel_bias_rw_psd: f64,
-    /// Initial position σ (also the ESKF's).
-    ///
-    /// Unit: m. Range: > 0.
-    pub sigma0_pos_m: f64,
-    /// Initial velocity σ (also the ESKF's).
-    ///
-    /// Unit: m/s. Range: > 0.
-    pub sigma0_vel_mps: f64,
-    /// Initial acceleration-bias σ.
-    ///
-    /// Unit: m/s². Range: > 0.
-    pub sigma0_accel_bias_mps2: f64,
-    /// Frame of the acceleration bias: `"body"` (an accelerometer bias) or `"nav"` (a
-    /// bias of the navigation-frame acceleration, e.g. from the uncorrected PINS
-    /// tilt).
-    ///
-    /// Range: `"body"` or `"nav"`.
-    pub accel_bias_frame: String,
+crate::nav_filter_toml! {
+    /// `[nav_filter]`.
+    pub struct NavTuningToml {
+        /// The filters' covariances are propagated every this many seconds of IMU data
+        /// (and before every update); the states at every IMU row.
+        ///
+        /// Unit: s. Range: > 0.
+        pub covariance_period_s: f64,
+        ..
+    }
 }
 
 /// `[eskf]`.
@@ -402,50 +339,33 @@ impl InsDvlToml {
                 ));
             }
         }
-        let speed_sigma = nn("vkf.speed_process_sigma_mps", k.speed_process_sigma_mps)?;
-        let vkf = VelocityFilterParams {
-            speed0: 0.0,
-            sf0: k.sf0,
-            b0: k.b0,
-            sigma0: [
-                pos("vkf.sigma_speed0_mps", k.sigma_speed0_mps)?,
-                pos("vkf.sigma_sf0", k.sigma_sf0)?,
-                pos("vkf.sigma_b0_mps", k.sigma_b0_mps)?,
-            ],
-            rpm_sigma: nn("vkf.rpm_sigma", k.rpm_sigma)?,
-            speed_process_var: speed_sigma * speed_sigma,
-            sf_rw_psd: nn("vkf.sf_rw_psd", k.sf_rw_psd)?,
-            bias_rw_psd: nn("vkf.bias_rw_psd", k.bias_rw_psd)?,
-            dvl_sigma: pos("vkf.dvl_sigma_mps", k.dvl_sigma_mps)?,
-        };
-        vkf.check()
-            .map_err(|e| SimError::invalid(file, "vkf", e.to_string()))?;
-        let n = &self.nav_filter;
-        let nav = IntegratedNavParams {
-            accel_psd: pos("nav_filter.accel_psd", n.accel_psd)?,
-            accel_bias_rw_psd: nn("nav_filter.accel_bias_rw_psd", n.accel_bias_rw_psd)?,
-            sigma0: [
-                pos("nav_filter.sigma0_pos_m", n.sigma0_pos_m)?,
-                pos("nav_filter.sigma0_vel_mps", n.sigma0_vel_mps)?,
-                pos(
-                    "nav_filter.sigma0_accel_bias_mps2",
-                    n.sigma0_accel_bias_mps2,
-                )?,
-            ],
-            bias_frame: match n.accel_bias_frame.as_str() {
-                "body" => AccelBiasFrame::Body,
-                "nav" => AccelBiasFrame::Nav,
-                other => {
-                    return Err(SimError::invalid(
-                        file,
-                        "nav_filter.accel_bias_frame",
-                        format!("must be \"body\" or \"nav\", got {other:?}"),
-                    ));
-                }
-            },
+        nn("vkf.speed_process_sigma_mps", k.speed_process_sigma_mps)?;
+        for (key, v) in [
+            ("vkf.sigma_speed0_mps", k.sigma_speed0_mps),
+            ("vkf.sigma_sf0", k.sigma_sf0),
+            ("vkf.sigma_b0_mps", k.sigma_b0_mps),
+        ] {
+            pos(key, v)?;
         }
-        .check()
-        .map_err(|e| SimError::invalid(file, "nav_filter", e.to_string()))?;
+        let rpm_sigma = nn("vkf.rpm_sigma", k.rpm_sigma)?;
+        nn("vkf.sf_rw_psd", k.sf_rw_psd)?;
+        nn("vkf.bias_rw_psd", k.bias_rw_psd)?;
+        pos("vkf.dvl_sigma_mps", k.dvl_sigma_mps)?;
+        let vkf = *k.velocity_filter_config(file, 0.0, rpm_sigma)?.params();
+        let n = &self.nav_filter;
+        pos("nav_filter.accel_psd", n.accel_psd)?;
+        nn("nav_filter.accel_bias_rw_psd", n.accel_bias_rw_psd)?;
+        for (key, v) in [
+            ("nav_filter.sigma0_pos_m", n.sigma0_pos_m),
+            ("nav_filter.sigma0_vel_mps", n.sigma0_vel_mps),
+            (
+                "nav_filter.sigma0_accel_bias_mps2",
+                n.sigma0_accel_bias_mps2,
+            ),
+        ] {
+            pos(key, v)?;
+        }
+        let nav = n.integrated_nav_config(file)?;
         let names: Vec<&str> = self.methods.iter().map(|m| m.name.as_str()).collect();
         check_method_names(file, &names)?;
         let methods = self

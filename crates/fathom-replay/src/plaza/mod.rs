@@ -42,7 +42,7 @@ pub use prepare::{PreparedLog, PreparedRange};
 pub use ranges::{RangeAnalysis, analyse_ranges, truth_at};
 pub use settings::{
     AblationToml, Calibration, DataToml, InitialToml, OdometryToml, OutlierHandling, PlazaSettings,
-    PlazaToml, RangesToml, RobustToml, SchemesToml, Variant, parse_settings,
+    PlazaToml, RangeNoiseToml, RangesToml, RobustToml, SchemesToml, Variant, parse_settings,
 };
 
 use fathom_data::plaza::{BeaconSite, PlazaLog};

@@ -132,6 +132,54 @@ pub struct RangesToml {
     pub scale_random_walk_per_sqrt_s: f64,
 }
 
+/// The range noise and the priors of the calibration states: the `[ranges]` table of
+/// the range-beacon replay (whose methods choose their calibration each), and
+/// [`RangesToml`] less its `calibration`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct RangeNoiseToml {
+    /// White range noise σ.
+    ///
+    /// Unit: m. Range: > 0.
+    pub sigma_m: f64,
+    /// Common-mode σ between beacons sampled together: SC's off-diagonal R; it also
+    /// adds to every range's variance (σ² + this²) in all schemes.
+    ///
+    /// Unit: m. Range: ≥ 0.
+    pub correlation_sigma_m: f64,
+    /// Prior σ of the range offset state (mean 0; methods with `calibration` "offset"
+    /// or "affine").
+    ///
+    /// Unit: m. Range: > 0.
+    pub offset_prior_sigma_m: f64,
+    /// Prior σ of the range scale error state (mean 0; "affine").
+    ///
+    /// Range: > 0.
+    pub scale_prior_sigma: f64,
+    /// Random walk of the offset.
+    ///
+    /// Unit: m/√s. Range: ≥ 0.
+    pub offset_random_walk_m_per_sqrt_s: f64,
+    /// Random walk of the scale error.
+    ///
+    /// Unit: 1/√s. Range: ≥ 0.
+    pub scale_random_walk_per_sqrt_s: f64,
+}
+
+impl RangesToml {
+    /// The range noise and the calibration priors (all but `calibration`).
+    pub fn noise(&self) -> RangeNoiseToml {
+        RangeNoiseToml {
+            sigma_m: self.sigma_m,
+            correlation_sigma_m: self.correlation_sigma_m,
+            offset_prior_sigma_m: self.offset_prior_sigma_m,
+            scale_prior_sigma: self.scale_prior_sigma,
+            offset_random_walk_m_per_sqrt_s: self.offset_random_walk_m_per_sqrt_s,
+            scale_random_walk_per_sqrt_s: self.scale_random_walk_per_sqrt_s,
+        }
+    }
+}
+
 /// `[robust]`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -276,52 +324,69 @@ pub(crate) fn scheme_from_name(
         })
 }
 
-impl PlazaToml {
-    /// Checks the values (errors name `file` and the key).
+/// The calibration spelled `name` (the value of key `key`).
+pub(crate) fn calibration_from_name(
+    file: &str,
+    key: &str,
+    name: &str,
+) -> Result<Calibration, SimError> {
+    match name {
+        "none" => Ok(Calibration::None),
+        "offset" => Ok(Calibration::Offset),
+        "affine" => Ok(Calibration::Affine),
+        other => Err(SimError::invalid(
+            file,
+            key,
+            format!("must be \"none\", \"offset\" or \"affine\", got {other:?}"),
+        )),
+    }
+}
+
+/// The tuning both range replays' settings files have (the Plaza replay's and the
+/// range-beacon replay's), borrowed from either: the `[initial]` σ, `[odometry]`, the
+/// range noise of `[ranges]`, `[robust]` and `[schemes]`.
+pub(crate) struct SharedTuning<'a> {
+    /// `[data] dir`.
+    pub data_dir: &'a str,
+    /// `[initial] position_sigma_m`.
+    pub position_sigma_m: f64,
+    /// `[initial] heading_sigma_rad`.
+    pub heading_sigma_rad: f64,
+    /// `[odometry]`.
+    pub odometry: &'a OdometryToml,
+    /// `[ranges]` but its `calibration`.
+    pub ranges: &'a RangeNoiseToml,
+    /// `[robust]`.
+    pub robust: &'a RobustToml,
+    /// `[schemes]`.
+    pub schemes: &'a SchemesToml,
+}
+
+impl SharedTuning<'_> {
+    /// Checks the keys into the engine's settings; the keys only the Plaza replay has
+    /// get the values the range-beacon replay runs with (no smoothing, strict range
+    /// order, no calibration, SC ablations behind a 1 σ gate: its methods bring their
+    /// own), which the Plaza replay replaces.
     ///
     /// # Errors
-    /// [`SimError::Invalid`] naming the key.
-    pub fn check(&self, file: &str) -> Result<PlazaSettings, SimError> {
-        fathom_sim::scenario::require_experiment(file, &self.experiment, "plaza")?;
-        let range_order = match self.data.range_order.as_str() {
-            "sort" => RangeOrder::Sort,
-            "strict" => RangeOrder::Strict,
-            other => {
-                return Err(SimError::invalid(
-                    file,
-                    "data.range_order",
-                    format!("must be \"sort\" or \"strict\", got {other:?}"),
-                ));
-            }
-        };
-        let calibration = match self.ranges.calibration.as_str() {
-            "none" => Calibration::None,
-            "offset" => Calibration::Offset,
-            "affine" => Calibration::Affine,
-            other => {
-                return Err(SimError::invalid(
-                    file,
-                    "ranges.calibration",
-                    format!("must be \"none\", \"offset\" or \"affine\", got {other:?}"),
-                ));
-            }
-        };
-        let r = &self.ranges;
-        let rb = &self.robust;
+    /// [`SimError::Invalid`] naming the key (`robust.*` first, then in file order).
+    pub(crate) fn check(&self, file: &str) -> Result<PlazaSettings, SimError> {
+        let r = self.ranges;
+        let rb = self.robust;
         let (huber_k, reject_sigma) = rb.check(file)?;
         Ok(PlazaSettings {
-            smooth: self.smooth,
-            data_dir: self.data.dir.clone(),
-            range_order,
+            smooth: false,
+            data_dir: self.data_dir.to_string(),
+            range_order: RangeOrder::Strict,
             position_sigma: require_positive(
                 file,
                 "initial.position_sigma_m",
-                self.initial.position_sigma_m,
+                self.position_sigma_m,
             )?,
             heading_sigma: require_positive(
                 file,
                 "initial.heading_sigma_rad",
-                self.initial.heading_sigma_rad,
+                self.heading_sigma_rad,
             )?,
             odometry: self.odometry.check(file)?,
             range_sigma: require_positive(file, "ranges.sigma_m", r.sigma_m)?,
@@ -330,7 +395,7 @@ impl PlazaToml {
                 "ranges.correlation_sigma_m",
                 r.correlation_sigma_m,
             )?,
-            calibration,
+            calibration: Calibration::None,
             offset_prior_sigma: require_positive(
                 file,
                 "ranges.offset_prior_sigma_m",
@@ -356,12 +421,53 @@ impl PlazaToml {
             recovery_after: rb.recovery_after,
             recovery_inflation: rb.recovery_inflation,
             epoch: require_positive(file, "schemes.epoch_s", self.schemes.epoch_s)?,
+            ablation_scheme: UpdateScheme::SynchronousCollective,
+            hard_gate_sigma: 1.0,
+        })
+    }
+}
+
+impl PlazaToml {
+    /// Checks the values (errors name `file` and the key).
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the key.
+    pub fn check(&self, file: &str) -> Result<PlazaSettings, SimError> {
+        fathom_sim::scenario::require_experiment(file, &self.experiment, "plaza")?;
+        let range_order = match self.data.range_order.as_str() {
+            "sort" => RangeOrder::Sort,
+            "strict" => RangeOrder::Strict,
+            other => {
+                return Err(SimError::invalid(
+                    file,
+                    "data.range_order",
+                    format!("must be \"sort\" or \"strict\", got {other:?}"),
+                ));
+            }
+        };
+        let calibration =
+            calibration_from_name(file, "ranges.calibration", &self.ranges.calibration)?;
+        let tuning = SharedTuning {
+            data_dir: &self.data.dir,
+            position_sigma_m: self.initial.position_sigma_m,
+            heading_sigma_rad: self.initial.heading_sigma_rad,
+            odometry: &self.odometry,
+            ranges: &self.ranges.noise(),
+            robust: &self.robust,
+            schemes: &self.schemes,
+        }
+        .check(file)?;
+        Ok(PlazaSettings {
+            smooth: self.smooth,
+            range_order,
+            calibration,
             ablation_scheme: scheme_from_name(file, "ablation.scheme", &self.ablation.scheme)?,
             hard_gate_sigma: require_positive(
                 file,
                 "ablation.hard_gate_sigma",
                 self.ablation.hard_gate_sigma,
             )?,
+            ..tuning
         })
     }
 }

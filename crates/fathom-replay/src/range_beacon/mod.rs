@@ -20,10 +20,11 @@ mod settings;
 #[cfg(test)]
 mod tests;
 
+pub use crate::plaza::RangeNoiseToml;
 pub use settings::{
     DepthNoiseToml, DvlMotionToml, InitialSigmaToml, LogDirToml, MethodKind, MethodSpec,
-    OutputToml, RangeBeaconMethodToml, RangeBeaconSettings, RangeBeaconToml, RangeNoiseToml,
-    default_methods, parse_settings,
+    OutputToml, RangeBeaconMethodToml, RangeBeaconSettings, RangeBeaconToml, default_methods,
+    parse_settings,
 };
 
 use fathom_estimators::schemes::{ChannelCounts, Decision, Disposition};

@@ -2,15 +2,14 @@
 //! (shared tuning, then a `[[methods]]` list with each method's own choices), and its
 //! check into [`RangeBeaconSettings`].
 
-use fathom_estimators::schemes::UpdateScheme;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::plaza::settings::scheme_from_name;
+use crate::plaza::settings::{SharedTuning, calibration_from_name, scheme_from_name};
 use crate::plaza::{
-    Calibration, OdometryToml, OutlierHandling, PlazaSettings, RobustToml, SchemesToml, Variant,
+    Calibration, OdometryToml, OutlierHandling, PlazaSettings, RangeNoiseToml, RobustToml,
+    SchemesToml, Variant,
 };
-use fathom_data::plaza::RangeOrder;
 use fathom_sim::SimError;
 use fathom_sim::method_list::check_method_names;
 use fathom_sim::scenario::{require_experiment, require_non_negative, require_positive};
@@ -100,38 +99,6 @@ pub struct DvlMotionToml {
     ///
     /// Unit: rad/s. Range: ≥ 0.
     pub yaw_rate_sigma_rad_per_s: f64,
-}
-
-/// `[ranges]`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RangeNoiseToml {
-    /// White range noise σ.
-    ///
-    /// Unit: m. Range: > 0.
-    pub sigma_m: f64,
-    /// Common-mode σ between beacons sampled together: SC's off-diagonal R; it also
-    /// adds to every range's variance (σ² + this²) in all schemes.
-    ///
-    /// Unit: m. Range: ≥ 0.
-    pub correlation_sigma_m: f64,
-    /// Prior σ of the range offset state (mean 0; methods with `calibration` "offset"
-    /// or "affine").
-    ///
-    /// Unit: m. Range: > 0.
-    pub offset_prior_sigma_m: f64,
-    /// Prior σ of the range scale error state (mean 0; "affine").
-    ///
-    /// Range: > 0.
-    pub scale_prior_sigma: f64,
-    /// Random walk of the offset.
-    ///
-    /// Unit: m/√s. Range: ≥ 0.
-    pub offset_random_walk_m_per_sqrt_s: f64,
-    /// Random walk of the scale error.
-    ///
-    /// Unit: 1/√s. Range: ≥ 0.
-    pub scale_random_walk_per_sqrt_s: f64,
 }
 
 /// `[depth]`.
@@ -303,59 +270,16 @@ impl RangeBeaconToml {
     /// [`SimError::Invalid`] naming the key (`methods[2].scheme`, ...).
     pub fn check(&self, file: &str) -> Result<RangeBeaconSettings, SimError> {
         require_experiment(file, &self.experiment, "range-beacon")?;
-        let r = &self.ranges;
-        let rb = &self.robust;
-        let (huber_k, reject_sigma) = rb.check(file)?;
-        let engine = PlazaSettings {
-            data_dir: self.data.dir.clone(),
-            smooth: false,
-            range_order: RangeOrder::Strict,
-            position_sigma: require_positive(
-                file,
-                "initial.position_sigma_m",
-                self.initial.position_sigma_m,
-            )?,
-            heading_sigma: require_positive(
-                file,
-                "initial.heading_sigma_rad",
-                self.initial.heading_sigma_rad,
-            )?,
-            odometry: self.odometry.check(file)?,
-            range_sigma: require_positive(file, "ranges.sigma_m", r.sigma_m)?,
-            correlation_sigma: require_non_negative(
-                file,
-                "ranges.correlation_sigma_m",
-                r.correlation_sigma_m,
-            )?,
-            calibration: Calibration::None,
-            offset_prior_sigma: require_positive(
-                file,
-                "ranges.offset_prior_sigma_m",
-                r.offset_prior_sigma_m,
-            )?,
-            scale_prior_sigma: require_positive(
-                file,
-                "ranges.scale_prior_sigma",
-                r.scale_prior_sigma,
-            )?,
-            offset_random_walk: require_non_negative(
-                file,
-                "ranges.offset_random_walk_m_per_sqrt_s",
-                r.offset_random_walk_m_per_sqrt_s,
-            )?,
-            scale_random_walk: require_non_negative(
-                file,
-                "ranges.scale_random_walk_per_sqrt_s",
-                r.scale_random_walk_per_sqrt_s,
-            )?,
-            huber_k,
-            reject_sigma,
-            recovery_after: rb.recovery_after,
-            recovery_inflation: rb.recovery_inflation,
-            epoch: require_positive(file, "schemes.epoch_s", self.schemes.epoch_s)?,
-            ablation_scheme: UpdateScheme::SynchronousCollective,
-            hard_gate_sigma: 1.0,
-        };
+        let engine = SharedTuning {
+            data_dir: &self.data.dir,
+            position_sigma_m: self.initial.position_sigma_m,
+            heading_sigma_rad: self.initial.heading_sigma_rad,
+            odometry: &self.odometry,
+            ranges: &self.ranges,
+            robust: &self.robust,
+            schemes: &self.schemes,
+        }
+        .check(file)?;
         let mut dvl_velocity_sigma = [0.0; 3];
         for (i, s) in self.dvl.velocity_sigma_mps.iter().enumerate() {
             dvl_velocity_sigma[i] =
@@ -417,18 +341,11 @@ fn check_method(file: &str, i: usize, m: &RangeBeaconMethodToml) -> Result<Metho
                 ));
             };
             let scheme = scheme_from_name(file, &key("scheme"), scheme)?;
-            let calibration = match m.calibration.as_deref().unwrap_or("none") {
-                "none" => Calibration::None,
-                "offset" => Calibration::Offset,
-                "affine" => Calibration::Affine,
-                other => {
-                    return Err(SimError::invalid(
-                        file,
-                        key("calibration"),
-                        format!("must be \"none\", \"offset\" or \"affine\", got {other:?}"),
-                    ));
-                }
-            };
+            let calibration = calibration_from_name(
+                file,
+                &key("calibration"),
+                m.calibration.as_deref().unwrap_or("none"),
+            )?;
             let outliers = match (m.outliers.as_deref().unwrap_or("robust"), m.gate_sigma) {
                 ("robust", None) => OutlierHandling::Robust,
                 ("robust", Some(_)) => {
