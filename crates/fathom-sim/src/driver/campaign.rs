@@ -402,14 +402,7 @@ pub fn merge(
     };
     let executed = exp.execute_from(&job, &mut source)?;
     let elapsed = start.elapsed();
-    let setup = super::Setup::of(exp, &executed.resolved.toml);
-    let mut result = write_executed(
-        &executed,
-        &first.scenario_label,
-        &setup,
-        claim.dir(),
-        elapsed,
-    )?;
+    let mut result = write_executed(exp, &executed, &first.scenario_label, claim.dir(), elapsed)?;
     result.relocate(&claim);
     claim.commit(RunInfo {
         fathom_version: env!("CARGO_PKG_VERSION").to_string(),
