@@ -10,12 +10,18 @@
 //!   ground truth;
 //! - [`ins_dvl`]: INS / DVL navigation on one's own log (PINS, INS-DVL, gated
 //!   INS-DVL, the RPM velocity filter, the 15-state ESKF);
-//! - [`consistency`]: the NIS summaries a replay without ground truth reports;
+//! - [`consistency`]: the tested measurements and the NIS summaries a replay reports;
 //! - [`own_log`]: the front end of `fathom replay range-beacon|ins-dvl <dir>`
-//!   (settings, log, replay, the output texts).
+//!   (settings, log, replay, the output texts);
+//! - [`figures`]: the figures every replay draws (estimate vs truth, error with 3σ,
+//!   innovations with ±3√S, NIS against a consistent filter's interval);
+//! - [`data_dir`]: where a replay's data folder is.
 
 pub mod consistency;
+pub mod data_dir;
+pub mod figures;
 pub mod ins_dvl;
 pub mod own_log;
 pub mod plaza;
 pub mod range_beacon;
+
