@@ -7,12 +7,29 @@
 
 use std::path::Path;
 
+use fathom::report::output::{Summary, read_summary_json};
+
 use crate::support::{fathom, read, repo_root, scratch};
 
 fn ok(dir: &Path, args: &[&str]) -> String {
     let r = fathom(dir, args);
     assert_eq!(r.code, 0, "{args:?}: {}", r.stderr);
     r.stdout
+}
+
+/// The unit and value cells of the console row `method` / `metric` (the table of
+/// `fathom run`: `method | metric | unit | value`), if printed.
+fn console_row(console: &str, method: &str, metric: &str) -> Option<(String, String)> {
+    console.lines().find_map(|l| {
+        let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+        (cells.len() >= 4 && cells[0] == method && cells[1] == metric)
+            .then(|| (cells[2].to_string(), cells[3].to_string()))
+    })
+}
+
+/// The shared `summary.json` of the output folder `dir`.
+fn summary(dir: &Path) -> Summary {
+    read_summary_json(dir.join("summary.json")).expect("summary.json in the shared format")
 }
 
 /// Runs `args`, expects exit code 2 and one error line containing every `want`.
@@ -75,8 +92,14 @@ fn example_logs_replay_with_and_without_truth() {
     );
 
     let out = ok(&root, &["replay", "range-beacon", "rb", "--out", "o-rb"]);
+    // The console is `fathom run`'s table: the error rows in metres, the NIS rows.
+    assert_eq!(
+        console_row(&out, "AS", "mean").map(|c| c.0),
+        Some("m".into()),
+        "{out}"
+    );
     assert!(
-        out.contains("mean [m]") && out.contains("mean NIS"),
+        console_row(&out, "AS", "nis_ranges_mean").is_some(),
         "{out}"
     );
     let report = read(&root.join("o-rb"), "report.md");
@@ -85,18 +108,10 @@ fn example_logs_replay_with_and_without_truth() {
         "{report}"
     );
     // The filters beat dead reckoning on the example (DVL with a 1 % scale error).
-    let summary: serde_json::Value =
-        serde_json::from_str(&read(&root.join("o-rb"), "summary.json")).unwrap();
-    let mean = |name: &str| {
-        summary["methods"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|m| m["name"] == name)
-            .unwrap()["position_error_m"]["mean"]
-            .as_f64()
-            .unwrap()
-    };
+    let s = summary(&root.join("o-rb"));
+    assert_eq!(s.experiment, "range-beacon");
+    assert_eq!(s.extra["error"], "3D");
+    let mean = |name: &str| s.row(name, "mean").expect("mean row").value;
     for m in ["AS", "SC", "SI"] {
         assert!(
             mean(m) < mean("DR"),
@@ -112,7 +127,15 @@ fn example_logs_replay_with_and_without_truth() {
         &root,
         &["replay", "range-beacon", "rb-nt", "--out", "o-rb-nt"],
     );
-    assert!(!out.contains("mean [m]") && out.contains("ranges"), "{out}");
+    // Without truth: no error rows, the NIS rows of the ranges.
+    assert!(
+        console_row(&out, "AS", "mean").is_none()
+            && console_row(&out, "AS", "nis_ranges_mean").is_some(),
+        "{out}"
+    );
+    let s = summary(&root.join("o-rb-nt"));
+    assert!(s.rows.iter().all(|r| r.metric != "rmse"), "{:?}", s.rows);
+    assert_eq!(s.extra["with_truth"], false);
     let report = read(&root.join("o-rb-nt"), "report.md");
     assert!(
         report.contains("no `truth.csv`") && !report.contains("Position error"),
@@ -132,7 +155,8 @@ fn example_logs_replay_with_and_without_truth() {
     assert!(read(&root.join("o-ins"), "report.md").contains("Horizontal position error"));
     let out = ok(&root, &["replay", "ins-dvl", "ins-nt", "--out", "o-ins-nt"]);
     assert!(
-        out.contains("DVL velocity") && !out.contains("mean [m]"),
+        console_row(&out, "VKF", "nis_dvl_velocity_mean").is_some()
+            && console_row(&out, "VKF", "mean").is_none(),
         "{out}"
     );
 
@@ -271,21 +295,33 @@ fn plaza_through_the_layout_gives_the_plaza_numbers() {
         ],
     );
     let native = ok(&root, &["replay", "plaza", &p, "--out", "o2"]);
-    // Same table rows (method, mean, std, max, rmse) for every method.
-    let rows = |text: &str| -> Vec<String> {
-        text.lines()
-            .filter(|l| l.split_whitespace().count() == 6 && !l.starts_with("method"))
-            .filter(|l| {
-                l.split_whitespace()
-                    .nth(1)
-                    .is_some_and(|v| v.parse::<f64>().is_ok())
-            })
-            .map(|l| l.split_whitespace().take(5).collect::<Vec<_>>().join(" "))
-            .collect()
-    };
-    let (a, b) = (rows(&own), rows(&native));
-    assert!(a.len() >= 4, "{own}");
-    assert_eq!(a, b, "own:\n{own}\nnative:\n{native}");
+    // The same rows (method, mean, std, max, rmse) for every method of the converted
+    // log, in the one `summary.json` format both commands write.
+    let (a, b) = (summary(&root.join("o1")), summary(&root.join("o2")));
+    let mut compared = 0;
+    for row in a
+        .rows
+        .iter()
+        .filter(|r| ["mean", "std", "max", "rmse"].contains(&r.metric.as_str()))
+    {
+        let other = b.row(&row.method, &row.metric).unwrap_or_else(|| {
+            panic!(
+                "{} {} not in `replay plaza`:\n{native}",
+                row.method, row.metric
+            )
+        });
+        let tol = 1e-9 * row.value.abs().max(1e-3);
+        assert!(
+            (row.value - other.value).abs() <= tol,
+            "{} {}: own {} vs native {}\nown:\n{own}\nnative:\n{native}",
+            row.method,
+            row.metric,
+            row.value,
+            other.value
+        );
+        compared += 1;
+    }
+    assert!(compared >= 16, "{compared} rows compared:\n{own}");
 }
 
 /// The own-log replays write through the same safe output folder as `fathom run`: a

@@ -9,11 +9,21 @@
 //! and the truth is interpolated linearly to that row's time. Every velocity and
 //! depth update's innovation and NIS are kept ([`Update`]): without truth they are
 //! what the report shows.
+//!
+//! [`InsDvl`] runs it as a job of the runner (`fathom replay ins-dvl DIR`): settings
+//! -> log -> replay ([`replay`], [`run`]) -> rows, checks and CSV files -> figures ->
+//! report notes, each step in its own file.
 
+mod analysis;
+mod figures;
+mod job;
+mod report;
 mod run;
 mod settings;
 #[cfg(test)]
 mod tests;
+
+pub use job::{InsDvl, Prepared};
 
 pub use settings::{
     DepthSigmaToml, DvlAidToml, EskfTuningToml, ImuModelToml, InsDvlMethodToml, InsDvlSettings,

@@ -14,11 +14,21 @@
 //! every `[output] period_s` from the start to the last stamp of the log. Every
 //! range's innovation and NIS are kept ([`Innovation`]): without truth they are what
 //! the report shows.
+//!
+//! [`RangeBeacon`] runs it as a job of the runner (`fathom replay range-beacon DIR`):
+//! settings -> log -> replay ([`replay`]) -> rows, checks and CSV files -> figures ->
+//! report notes, each step in its own file.
 
+mod analysis;
 pub mod dvl;
+mod figures;
+mod job;
+mod report;
 mod settings;
 #[cfg(test)]
 mod tests;
+
+pub use job::{Prepared, RangeBeacon};
 
 pub use settings::{
     DepthNoiseToml, DvlMotionToml, InitialSigmaToml, LogDirToml, MethodKind, MethodSpec,
