@@ -3,7 +3,8 @@
 //! without ground truth; corrupted copies (NaN, time going backwards, a missing or an
 //! unknown column, a missing folder) exit with code 2 and one line naming the file,
 //! line and column; the CMU Plaza data converted into the layout replays to the
-//! `replay plaza` numbers (the repository's `data/plaza1`).
+//! `replay plaza` numbers (the repository's `data/plaza1`); every replay (`plaza`,
+//! `range-beacon`, `ins-dvl`) writes the outputs of `fathom run`.
 
 use std::path::Path;
 
@@ -384,4 +385,120 @@ fn own_log_replay_keeps_a_users_file_in_out() {
         .filter(|n| n.starts_with(".o2") || n == "o2")
         .collect();
     assert!(stray.is_empty(), "{stray:?}");
+}
+
+/// The rows of the results table of `report.md` (`| method | metric | unit | ... |`,
+/// the first table after the header, one line per row of `summary.json`).
+fn report_rows(report: &str) -> Vec<Vec<String>> {
+    report
+        .lines()
+        .skip_while(|l| !l.starts_with("| method | metric | unit |"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| {
+            l.trim_matches('|')
+                .split('|')
+                .map(|c| c.trim().to_string())
+                .collect()
+        })
+        .collect()
+}
+
+/// Every replay (`plaza` on the repository's data, `range-beacon` and `ins-dvl` on
+/// example logs) writes what `fathom run` writes, through the driver: `summary.json`
+/// in the one shared format (every row with a unit in `report.md` and on the
+/// console), `report.md` linking the figures, `run_info.json` with command `replay`,
+/// the settings as given and resolved, and the figures of every replay: the paths
+/// against the truth, the error with 3σ, the innovations and the NIS.
+#[test]
+fn every_replay_writes_the_outputs_of_a_run() {
+    let root = scratch("own-logs-outputs");
+    ok(
+        &root,
+        &["log", "example", "range-beacon", "rb", "--duration", "60"],
+    );
+    ok(
+        &root,
+        &["log", "example", "ins-dvl", "ins", "--duration", "60"],
+    );
+    let plaza = repo_root().join("data/plaza1").display().to_string();
+    let common = ["estimate_vs_truth.svg", "error_3sigma.svg", "nis.svg"];
+    let cases: [(&str, &str, &str, &[&str]); 3] = [
+        ("range-beacon", "rb", "o-rb", &["innovations.svg"]),
+        (
+            "ins-dvl",
+            "ins",
+            "o-ins",
+            &[
+                "innovations_north.svg",
+                "innovations_east.svg",
+                "innovations_down.svg",
+            ],
+        ),
+        ("plaza", &plaza, "o-plaza", &["innovations.svg"]),
+    ];
+    for (kind, data, out, innovations) in cases {
+        let console = ok(&root, &["replay", kind, data, "--out", out]);
+        let dir = root.join(out);
+        let s = summary(&dir);
+        assert_eq!(s.experiment, kind);
+        assert!(!s.rows.is_empty(), "{kind}");
+        // Every row has a unit, in the report's table and on the console.
+        let report = read(&dir, "report.md");
+        let rows = report_rows(&report);
+        assert_eq!(rows.len(), s.rows.len(), "{kind}:\n{report}");
+        for (cells, row) in rows.iter().zip(&s.rows) {
+            assert_eq!((&cells[0], &cells[1]), (&row.method, &row.metric), "{kind}");
+            assert_ne!(
+                cells[2], "-",
+                "{kind}: {} / {} has no unit",
+                row.method, row.metric
+            );
+            let (unit, _) = console_row(&console, &row.method, &row.metric)
+                .unwrap_or_else(|| panic!("{kind}: {} / {} not printed", row.method, row.metric));
+            assert_eq!(unit, cells[2], "{kind}");
+        }
+        assert!(
+            report.contains("one deterministic replay (no Monte Carlo runs, no seed)"),
+            "{kind}:\n{report}"
+        );
+        let info: serde_json::Value =
+            serde_json::from_str(&read(&dir, "run_info.json")).expect("run_info.json");
+        assert_eq!(info["command"], "replay", "{kind}: {info}");
+        assert_eq!(info["experiment"], kind, "{kind}: {info}");
+        let listed: Vec<&str> = info["files"]
+            .as_array()
+            .expect("files")
+            .iter()
+            .filter_map(|f| f.as_str())
+            .collect();
+        for f in common.iter().chain(innovations).chain(&[
+            "summary.json",
+            "report.md",
+            "scenario.toml",
+            "scenario.resolved.toml",
+            "estimates.csv",
+        ]) {
+            assert!(listed.contains(f), "{kind}: {f} not in {listed:?}");
+            assert!(dir.join(f).is_file(), "{kind}: {f} missing");
+            if f.ends_with(".svg") {
+                assert!(
+                    read(&dir, f).trim_start().starts_with("<svg"),
+                    "{kind}: {f}"
+                );
+                assert!(
+                    report.contains(&format!("- [{f}]({f})")),
+                    "{kind}: {f} not linked"
+                );
+            }
+        }
+    }
+    // The settings written beside the outputs replay again with `fathom run`, to the
+    // same rows.
+    let again = ok(&root, &["run", "o-rb/scenario.toml", "--out", "o-rb-again"]);
+    assert!(console_row(&again, "AS", "rmse").is_some(), "{again}");
+    assert_eq!(
+        summary(&root.join("o-rb-again")).rows,
+        summary(&root.join("o-rb")).rows
+    );
 }
