@@ -6,7 +6,7 @@
 //! fathom check <scenario.toml> [--max-memory-gb G] [--max-hours H]
 //! fathom list
 //! fathom replay plaza <DIR> [--config FILE] [--out DIR] [--force]
-//! fathom replay range-beacon|ins-dvl <DIR> [--config FILE] [--out DIR]
+//! fathom replay range-beacon|ins-dvl <DIR> [--config FILE] [--out DIR] [--force]
 //! fathom log example range-beacon|ins-dvl <DIR> [--duration S] [--seed S] [--no-truth]
 //! fathom log from-plaza <PLAZA_DIR> <DIR>
 //! fathom log check <DIR>
@@ -41,21 +41,30 @@
 //! that drives the cost. `list` shows the experiments, estimators, update schemes and
 //! sensors.
 //!
-//! `replay plaza` replays range-beacon localization on a recorded data set:
+//! `run` and `check` also take the settings file of a replay of one's own log
+//! (`experiment = "range-beacon"` or `"ins-dvl"`, its `[data] dir` naming the log).
 //!
-//! `DIR` holds one CMU Plaza data set in its native files (`*_DR.txt`, `*_TD.txt`,
-//! `*_.mat`). The command runs pure dead reckoning and the EKF under the AS, SC and SI
-//! update schemes (plus ablations) and writes per-time CSV series, `summary.json`,
-//! `report.md` and SVG figures into `--out` (default `plaza-replay`). Settings come
-//! from `--config` or, by default, the built-in copy of `scenarios/plaza.toml`.
-//!
-//! `replay range-beacon` and `replay ins-dvl` replay one's own log, a folder in
-//! fathom's CSV layout (`docs/own-data.md`), with the methods of `--config` (default:
-//! the built-in `scenarios/range-beacon.toml` / `scenarios/ins-dvl.toml`), and write
-//! `report.md`, `summary.json`, `estimates.csv` and `innovations.csv` into `--out`
-//! (default `<kind>-replay`). `log example` writes a simulated log of either kind,
-//! `log from-plaza` converts a CMU Plaza data set into the layout, `log check` reads
-//! every file of a log and reports the first error (file, line, column).
+//! `replay plaza|range-beacon|ins-dvl DIR` replays estimators on recorded data, a job
+//! of the same driver as `run` (`run_info.json` says `command: "replay"`), with the
+//! settings of `--config` or, by default, the built-in `scenarios/plaza.toml`,
+//! `scenarios/range-beacon.toml` or `scenarios/ins-dvl.toml`, whose `[data] dir` is
+//! replaced by `DIR`. `DIR` holds one CMU Plaza data set in its native files
+//! (`*_DR.txt`, `*_TD.txt`, `*_.mat`: dead reckoning and the EKF under AS, SC and SI
+//! plus ablations) or one's own log in fathom's CSV layout (`docs/own-data.md`, the
+//! methods of the settings' `[[methods]]` list). Every replay writes, into `--out`
+//! (default `plaza-replay` / `<kind>-replay`), what `run` writes: `summary.json`
+//! (rows `method, metric, value` of the shared format), `report.md` (every row with
+//! its unit, the claims or checks, notes, links to the figures), the settings as
+//! given and resolved (`scenario.toml`, `scenario.resolved.toml`: `fathom run
+//! scenario.toml` replays again), `run_info.json`, CSV series (`estimates.csv`;
+//! `ranges.csv` or `innovations.csv`) and the figures of every replay: the paths
+//! against the truth (`estimate_vs_truth.svg`), the error with the filter's 3σ
+//! (`error_3sigma.svg`), the innovations with ±3√S (`innovations*.svg`) and the NIS
+//! against a consistent filter's interval (`nis*.svg`). It prints the rows with their
+//! units and the claims or checks, as `run` does. `log example` writes a simulated
+//! log of either kind, `log from-plaza` converts a CMU Plaza data set into the layout,
+//! `log check` reads every file of a log and reports the first error (file, line,
+//! column).
 //!
 //! Exit codes: 0 success; 2 for anything the user wrote (flags, the scenario or
 //! settings file, a data folder or data file, the output folder); 1 for a failure of
@@ -68,31 +77,30 @@ mod own_logs;
 mod pils;
 mod pils_compare;
 mod pils_session;
+mod replay;
 
 use std::io::{IsTerminal, Write as _};
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::Mutex;
 use std::time::Instant;
 
 use campaign::{CampaignKind, MergeArgs, campaign_cmd, merge_cmd, run_shard_cmd};
-use own_logs::{LogCmd, OwnArgs, log_cmd, replay_own};
+use own_logs::{LogCmd, log_cmd};
+use replay::{ReplayData, replay_cmd};
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
-use fathom_data::layout::LogKind;
-use fathom_experiments::plaza::Plaza;
 use fathom_experiments::registry;
-use fathom_replay::plaza::parse_settings;
+use fathom_replay::own_log_replays;
 use fathom_sim::cost::Limits;
 use fathom_sim::driver::{console_claims, console_rows, console_setup};
-use fathom_sim::experiment::Shard;
+use fathom_sim::experiment::{DynExperiment, Shard};
 use fathom_sim::progress::{Progress, ProgressEvent};
 use fathom_sim::user_run::{
     RunOptions, assess_scenario, check_line, check_scenario_with, job_of, one_line, run_assessed,
-    run_scenario_text,
 };
-use fathom_sim::{Experiment, SimError, error_chain};
+use fathom_sim::{SimError, error_chain};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
 #[derive(Debug, Parser)]
@@ -108,7 +116,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
-    /// Replay estimators on a recorded data set and score them against ground truth.
+    /// Replay estimators on a recorded data set (CMU Plaza, or your own log) and score
+    /// them against ground truth or their innovations.
     #[command(subcommand)]
     Replay(ReplayData),
     /// Run a scenario file (copy one from `scenarios/`, change numbers, run it).
@@ -207,35 +216,6 @@ struct CheckArgs {
     limits: LimitArgs,
 }
 
-#[derive(Debug, Subcommand)]
-enum ReplayData {
-    /// CMU Plaza range-only data: wheel odometry, ranges to radio beacons, ground truth.
-    Plaza(PlazaArgs),
-    /// Your own range-beacon log (fathom's CSV layout, docs/own-data.md).
-    RangeBeacon(OwnArgs),
-    /// Your own INS / DVL log (fathom's CSV layout, docs/own-data.md).
-    InsDvl(OwnArgs),
-}
-
-#[derive(Debug, Args)]
-struct PlazaArgs {
-    /// Folder holding the data set's `*_DR.txt`, `*_TD.txt` and `*_.mat` files.
-    dir: PathBuf,
-    /// Settings file (TOML, the schema of `scenarios/plaza.toml`); default: built in.
-    #[arg(long, value_name = "FILE")]
-    config: Option<PathBuf>,
-    /// Output folder (created if needed).
-    #[arg(long, value_name = "DIR", default_value = "plaza-replay")]
-    out: PathBuf,
-    /// Write into a folder holding files fathom did not write (they are kept; only
-    /// fathom's own files are replaced).
-    #[arg(long)]
-    force: bool,
-    /// Not an option of a replay: accepted only to explain that it does not apply.
-    #[arg(long, hide = true, value_name = "S")]
-    seed: Option<String>,
-}
-
 /// A failure and its exit code.
 #[derive(Debug)]
 enum Failure {
@@ -257,130 +237,20 @@ pub(crate) fn failure(e: impl Into<SimError>) -> Failure {
     }
 }
 
-/// The text and label of a settings file: `config` if given (unreadable: a usage
-/// error), else the built-in `preset` labelled `preset_label`.
-pub(crate) fn settings_text(
-    config: Option<&Path>,
-    preset: &str,
-    preset_label: &str,
-) -> Result<(String, String), Failure> {
-    match config {
-        None => Ok((preset.to_string(), preset_label.to_string())),
-        Some(path) => {
-            let label = path.display().to_string();
-            let text = std::fs::read_to_string(path)
-                .with_context(|| format!("cannot read settings file `{label}`"))
-                .map_err(Failure::Usage)?;
-            Ok((text, label))
-        }
-    }
-}
-
-/// The settings text and its label: `--config` or the built-in preset. Checked here,
-/// so that a bad file is a usage error naming its key.
-fn load_settings(config: Option<&Path>) -> Result<(String, String), Failure> {
-    let (text, label) = settings_text(
-        config,
-        <Plaza as Experiment>::PRESET,
-        "built-in scenarios/plaza.toml",
-    )?;
-    parse_settings(&text, &label).map_err(|e| Failure::Usage(anyhow!(e)))?;
-    Ok((text, label))
-}
-
-/// `text` with its `[data] dir` replaced by `dir` (made absolute).
-fn with_data_dir(text: &str, dir: &Path) -> Result<String, Failure> {
-    let mut table: toml::Table = toml::from_str(text)
-        .context("settings")
-        .map_err(Failure::Usage)?;
-    let dir = std::path::absolute(dir)
-        .with_context(|| format!("cannot resolve `{}`", dir.display()))
-        .map_err(Failure::Usage)?;
-    let data = table
-        .get_mut("data")
-        .and_then(toml::Value::as_table_mut)
-        .ok_or_else(|| Failure::Usage(anyhow!("settings: missing table `[data]`")))?;
-    data.insert("dir".into(), toml::Value::String(dir.display().to_string()));
-    toml::to_string(&table)
-        .context("settings")
-        .map_err(Failure::Run)
-}
-
-fn replay_plaza(args: &PlazaArgs) -> Result<String, Failure> {
-    if args.seed.is_some() {
-        return Err(Failure::Usage(anyhow!(
-            "--seed does not apply to `replay plaza`: a replay on recorded data is \
-             deterministic (no random draws, no base seed)"
-        )));
-    }
-    let (text, label) = load_settings(args.config.as_deref())?;
-    if !args.dir.is_dir() {
-        return Err(Failure::Usage(anyhow!(
-            "cannot read the Plaza data: `{}` is not a folder",
-            args.dir.display()
-        )));
-    }
-    let text = with_data_dir(&text, &args.dir)?;
-    let options = RunOptions {
-        scenario: PathBuf::from(&label),
-        out_dir: Some(args.out.clone()),
-        runs: None,
-        threads: None,
-        seed: None,
-        base_dir: std::env::current_dir()
-            .context("cannot read the current directory")
-            .map_err(Failure::Run)?,
-        force: args.force,
-        limits: Limits::default(),
-    };
-    let (result, _) = run_scenario_text(&text, &label, &options, &registry(), None).map_err(
-        |e| match failure(e) {
-            Failure::Usage(e) => Failure::Usage(e.context("replay failed")),
-            Failure::Run(e) => Failure::Run(e.context("replay failed")),
-        },
-    )?;
-    let s = &result.summary;
-    let value = |m: &str, k: &str| s.row(m, k).map_or(f64::NAN, |r| r.value);
-    let mut methods: Vec<&str> = Vec::new();
-    for r in &s.rows {
-        if r.metric == "mean" && !methods.contains(&r.method.as_str()) {
-            methods.push(&r.method);
-        }
-    }
-    let mut text = format!("settings: {label}; data: {}\n\n", args.dir.display());
-    text.push_str(&format!(
-        "{:<22} {:>9} {:>9} {:>9} {:>9} {:>9}\n",
-        "method", "mean (m)", "std (m)", "max (m)", "rmse (m)", "rejected"
-    ));
-    for m in methods {
-        text.push_str(&format!(
-            "{:<22} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9}\n",
-            m,
-            value(m, "mean"),
-            value(m, "std"),
-            value(m, "max"),
-            value(m, "rmse"),
-            value(m, "rejected").round()
-        ));
-    }
-    text.push('\n');
-    for c in &s.claims {
-        text.push_str(&format!(
-            "[{}] {}: {}\n",
-            if c.holds { "holds" } else { "does not hold" },
-            c.id,
-            c.detail
-        ));
-    }
-    text.push_str(&format!("\noutputs: {}\n", args.out.display()));
-    Ok(text)
+/// What `fathom run` and `fathom check` accept: the paper experiments and the replays
+/// of one's own log (whose output folders hold a `scenario.toml` that `fathom run`
+/// reproduces).
+fn jobs() -> Vec<&'static dyn DynExperiment> {
+    let mut all = registry();
+    all.extend(own_log_replays());
+    all
 }
 
 fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
     if let Some(shard) = args.shard {
         return run_shard_cmd(args, shard);
     }
-    let registry = registry();
+    let registry = jobs();
     let limits = args.limits.limits()?;
     let label = args.scenario.display().to_string();
     let text = std::fs::read_to_string(&args.scenario)
@@ -519,7 +389,7 @@ fn progress_hook(bar: &ProgressBar, draw: bool) -> Progress {
 }
 
 fn check_cmd(args: &CheckArgs) -> Result<String, Failure> {
-    let registry = registry();
+    let registry = jobs();
     let limits = args.limits.limits()?;
     let resolved = check_scenario_with(&args.scenario, &registry, &limits)
         .map_err(|e| Failure::Usage(anyhow!(one_line(&error_chain(&e)))))?;
@@ -636,9 +506,7 @@ const SENSORS: &[(&str, &str)] = &[
 
 fn run(cli: &Cli) -> Result<String, Failure> {
     match &cli.command {
-        Command::Replay(ReplayData::Plaza(args)) => replay_plaza(args),
-        Command::Replay(ReplayData::RangeBeacon(args)) => replay_own(LogKind::RangeBeacon, args),
-        Command::Replay(ReplayData::InsDvl(args)) => replay_own(LogKind::InsDvl, args),
+        Command::Replay(cmd) => replay_cmd(cmd),
         Command::Log(cmd) => log_cmd(cmd),
         Command::Run(args) => run_scenario_cmd(args),
         Command::Check(args) => check_cmd(args),
@@ -795,60 +663,6 @@ mod tests {
         ] {
             let e = Cli::try_parse_from(&args).unwrap_err();
             assert!(e.use_stderr(), "{args:?}");
-        }
-    }
-
-    #[test]
-    fn built_in_settings_parse_and_bad_settings_are_usage_errors() {
-        assert!(load_settings(None).is_ok());
-        let dir = std::env::temp_dir().join(format!("fathom-cli-test-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
-        let bad = dir.join("bad.toml");
-        std::fs::write(
-            &bad,
-            <Plaza as Experiment>::PRESET.replace("sigma_m = 1.0", "sigma_m = -1.0"),
-        )
-        .unwrap();
-        match load_settings(Some(&bad)) {
-            Err(Failure::Usage(e)) => {
-                let s = format!("{e:#}");
-                assert!(
-                    s.contains("ranges.sigma_m") && s.contains("bad.toml"),
-                    "{s}"
-                );
-            }
-            other => panic!("expected a usage error, got {other:?}"),
-        }
-        assert!(matches!(
-            load_settings(Some(&dir.join("missing.toml"))),
-            Err(Failure::Usage(_))
-        ));
-        let args = PlazaArgs {
-            dir: dir.join("no-such-folder"),
-            config: None,
-            out: dir.join("out"),
-            seed: None,
-            force: false,
-        };
-        assert!(matches!(replay_plaza(&args), Err(Failure::Usage(_))));
-        std::fs::create_dir_all(dir.join("empty")).unwrap();
-        let args = PlazaArgs {
-            dir: dir.join("empty"),
-            ..args
-        };
-        // A data folder without the data set is the user's input: exit code 2.
-        match replay_plaza(&args) {
-            Err(Failure::Usage(e)) => assert!(format!("{e:#}").contains("_DR.txt"), "{e:#}"),
-            other => panic!("expected a usage error, got {other:?}"),
-        }
-        // A seed does not apply to a deterministic replay: a usage error, not ignored.
-        let args = PlazaArgs {
-            seed: Some("3".into()),
-            ..args
-        };
-        match replay_plaza(&args) {
-            Err(Failure::Usage(e)) => assert!(format!("{e:#}").contains("--seed"), "{e:#}"),
-            other => panic!("expected a usage error, got {other:?}"),
         }
     }
 }

@@ -1,4 +1,5 @@
-//! `fathom replay range-beacon|ins-dvl` and `fathom log`: the commands on logs in fathom's CSV layout.
+//! `fathom log example|from-plaza|check`: the commands that write and check logs in
+//! fathom's CSV layout (`fathom replay range-beacon|ins-dvl` replays them, `replay.rs`).
 
 use std::path::PathBuf;
 
@@ -11,29 +12,11 @@ use fathom_data::layout::{FileSet, LogKind, Manifest, write_log};
 use fathom_data::plaza::PlazaLog;
 use fathom_experiments::example_log::{ins_dvl_example, range_beacon_example};
 use fathom_experiments::plaza::Plaza;
-use fathom_replay::own_log::{OwnLogError, claim_output, preset, replay_dir, write_outputs};
 use fathom_replay::plaza::parse_settings;
 use fathom_sim::user_run::one_line;
 use fathom_sim::{Experiment, error_chain};
 
-use crate::{Failure, settings_text};
-
-#[derive(Debug, Args)]
-pub(crate) struct OwnArgs {
-    /// The log folder (`log.toml` and the CSV files).
-    pub(crate) dir: PathBuf,
-    /// Settings and methods (TOML, the schema of `scenarios/range-beacon.toml` or
-    /// `scenarios/ins-dvl.toml`); default: built in.
-    #[arg(long, value_name = "FILE")]
-    pub(crate) config: Option<PathBuf>,
-    /// Output folder (default `range-beacon-replay` / `ins-dvl-replay`).
-    #[arg(long, value_name = "DIR")]
-    pub(crate) out: Option<PathBuf>,
-    /// Write into a folder holding files fathom did not write (they are kept; only
-    /// fathom's own files are replaced).
-    #[arg(long)]
-    pub(crate) force: bool,
-}
+use crate::Failure;
 
 /// The two kinds of log.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -93,35 +76,6 @@ pub(crate) struct FromPlazaArgs {
 pub(crate) struct LogCheckArgs {
     /// The log folder.
     pub(crate) dir: PathBuf,
-}
-
-pub(crate) fn own_failure(e: OwnLogError) -> Failure {
-    let users = e.is_users();
-    let e = anyhow!(one_line(&error_chain(&e)));
-    if users {
-        Failure::Usage(e)
-    } else {
-        Failure::Run(e)
-    }
-}
-
-pub(crate) fn replay_own(kind: LogKind, args: &OwnArgs) -> Result<String, Failure> {
-    let (text, label) = settings_text(
-        args.config.as_deref(),
-        preset(kind),
-        &format!("built-in scenarios/{}.toml", kind.name()),
-    )?;
-    let out = args
-        .out
-        .clone()
-        .unwrap_or_else(|| PathBuf::from(format!("{}-replay", kind.name())));
-    // Claimed before the replay: a refused or unwritable folder costs no computing.
-    let claim = claim_output(&out, args.force).map_err(crate::failure)?;
-    let start = std::time::Instant::now();
-    let r = replay_dir(kind, &args.dir, &text, &label).map_err(own_failure)?;
-    let elapsed = start.elapsed().as_secs_f64();
-    let out = write_outputs(claim, kind, &label, &r.files, elapsed).map_err(crate::failure)?;
-    Ok(format!("{}\noutputs: {}\n", r.console, out.display()))
 }
 
 pub(crate) fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {

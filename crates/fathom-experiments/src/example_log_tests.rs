@@ -1,12 +1,15 @@
 //! The simulated example logs replayed through `fathom-replay`: with and without
 //! ground truth, both log kinds (the INS / DVL log is the `vkf` mission cut to 600 s:
-//! bottom lock is lost from about 300 s on).
+//! bottom lock is lost from about 300 s on), the replays run as jobs of the driver.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use fathom_data::layout::{LogKind, Manifest, write_log};
-use fathom_replay::ins_dvl::{parse_settings, replay};
-use fathom_replay::own_log::{INS_DVL_PRESET, RANGE_BEACON_PRESET, replay_dir};
+use fathom_replay::ins_dvl::{InsDvl, parse_settings, replay};
+use fathom_replay::range_beacon::RangeBeacon;
+use fathom_sim::SimError;
+use fathom_sim::driver::{ExperimentResult, WriteOptions, execute_to};
+use fathom_sim::experiment::{DynExperiment, Environment, Job};
 
 use crate::example_log::{ins_dvl_example, range_beacon_example};
 
@@ -25,6 +28,38 @@ fn scratch(name: &str) -> PathBuf {
     d
 }
 
+/// Replays the log in `dir` with `exp`'s built-in settings into `out`, as `fathom
+/// replay` does.
+fn replay_job(
+    exp: &dyn DynExperiment,
+    dir: &Path,
+    out: &Path,
+) -> Result<ExperimentResult, SimError> {
+    let text = exp.preset().replace(
+        "dir = \"my-log\"",
+        &format!("dir = {:?}", dir.to_str().unwrap()),
+    );
+    let job = Job {
+        text: &text,
+        file: "preset",
+        runs: None,
+        seed: None,
+        threads: Some(1),
+        progress: None,
+        env: Environment::new(dir),
+    };
+    let options = WriteOptions {
+        force: false,
+        command: "replay".into(),
+        scenario_files: true,
+    };
+    execute_to(exp, &job, out, &options).map(|(r, _)| r)
+}
+
+fn read(dir: &Path, file: &str) -> String {
+    std::fs::read_to_string(dir.join(file)).unwrap()
+}
+
 #[test]
 fn example_logs_replay_with_and_without_truth() {
     for truth in [true, false] {
@@ -36,19 +71,35 @@ fn example_logs_replay_with_and_without_truth() {
             &log.to_files(),
         )
         .unwrap();
-        let out = replay_dir(LogKind::RangeBeacon, &dir, RANGE_BEACON_PRESET, "preset").unwrap();
-        let report = &out.files[0].1;
+        let out = dir.with_extension("out");
+        let r = replay_job(&RangeBeacon, &dir, &out).unwrap();
+        let report = read(&out, "report.md");
         assert_eq!(report.contains("Position error against"), truth, "{report}");
-        assert!(report.contains("| SC | ranges |"), "{report}");
-        assert!(out.console.contains("mean NIS"));
-        let est = &out.files[2].1;
+        assert!(r.summary.row("SC", "nis_ranges_mean").is_some(), "{report}");
+        assert_eq!(r.summary.row("SC", "rmse").is_some(), truth);
+        assert_eq!(r.summary.extra["with_truth"], truth);
+        let est = read(&out, "estimates.csv");
         assert_eq!(est.lines().next().unwrap().contains("true_north[m]"), truth);
-        // A range-beacon folder is not an INS log.
-        let e = replay_dir(LogKind::InsDvl, &dir, INS_DVL_PRESET, "preset").unwrap_err();
+        // The figures of every replay; the plan view and the error only with truth.
+        for (f, with) in [
+            ("estimate_vs_truth.svg", truth),
+            ("error_3sigma.svg", truth),
+            ("innovations.svg", true),
+            ("nis.svg", true),
+            ("innovations_depth.svg", true),
+            ("nis_depth.svg", true),
+        ] {
+            assert_eq!(out.join(f).is_file(), with, "{f}");
+        }
+        // A range-beacon folder is not an INS log: the user's error, before anything
+        // is written.
+        let e = replay_job(&InsDvl, &dir, &dir.with_extension("o2")).unwrap_err();
+        let chain = fathom_sim::error_chain(&e);
         assert!(
-            e.is_users() && e.to_string().contains("range-beacon"),
-            "{e}"
+            e.is_user_error() && chain.contains("range-beacon"),
+            "{chain}"
         );
+        assert!(!dir.with_extension("o2").exists());
     }
     let dir = scratch("ins");
     let log = ins_dvl_example(60.0, 3, false).unwrap();
@@ -58,15 +109,17 @@ fn example_logs_replay_with_and_without_truth() {
         &log.to_files(),
     )
     .unwrap();
-    let out = replay_dir(LogKind::InsDvl, &dir, INS_DVL_PRESET, "preset").unwrap();
-    assert!(
-        out.files[0].1.contains("| ESKF | DVL velocity |"),
-        "{}",
-        out.files[0].1
-    );
+    let out = dir.with_extension("out");
+    let r = replay_job(&InsDvl, &dir, &out).unwrap();
+    assert!(r.summary.row("ESKF", "nis_dvl_velocity_mean").is_some());
+    assert!(r.summary.row("ESKF", "mean").is_none());
+    for f in ["innovations_north.svg", "nis.svg", "nis_depth.svg"] {
+        assert!(out.join(f).is_file(), "{f}");
+    }
     // A missing folder is the user's error, naming the folder.
-    let e = replay_dir(LogKind::InsDvl, &dir.join("nope"), INS_DVL_PRESET, "p").unwrap_err();
-    assert!(e.is_users() && e.to_string().contains("nope"), "{e}");
+    let e = replay_job(&InsDvl, &dir.join("nope"), &dir.with_extension("o3")).unwrap_err();
+    let chain = fathom_sim::error_chain(&e);
+    assert!(e.is_user_error() && chain.contains("nope"), "{chain}");
 }
 
 #[test]

@@ -1,11 +1,61 @@
-//! What a replay without ground truth can say about a filter: the normalized
-//! innovation squared (NIS) of its measurements against the chi-square distribution a
-//! consistent filter gives (Bar-Shalom, Li, Kirubarajan 2001, §5.4: the time-averaged
-//! NIS of `K` independent `m`-dimensional innovations times `K` is chi-square with
-//! `K m` degrees of freedom).
+//! What a replay without ground truth can say about a filter: its tested scalar
+//! measurements ([`Innovation`]) and the normalized innovation squared (NIS) of its
+//! measurements against the chi-square distribution a consistent filter gives
+//! (Bar-Shalom, Li, Kirubarajan 2001, §5.4: the time-averaged NIS of `K` independent
+//! `m`-dimensional innovations times `K` is chi-square with `K m` degrees of freedom).
 
+use fathom_estimators::schemes::{Decision, Disposition};
 use fathom_stats::ChiSquareBounds;
 use fathom_stats::chi2_quantile;
+
+/// One tested scalar measurement (a range, a depth): its innovation and NIS.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct Innovation {
+    /// Filter time it was processed at, `t - t0`, s.
+    pub time: f64,
+    /// Beacon row (channel), or the number of beacons for depth.
+    pub channel: usize,
+    /// Row of the measurement in its file (0-based, data rows only).
+    pub row: usize,
+    /// The measured value, m.
+    pub value: f64,
+    /// `z - h(x)` at the prior, m.
+    pub innovation: f64,
+    /// `nu^2 / S`.
+    pub nis: f64,
+    /// Accepted or rejected.
+    pub disposition: Disposition,
+}
+
+impl Innovation {
+    /// The innovation of a decision that was tested (has a NIS and an innovation).
+    pub fn of_decision(d: &Decision) -> Option<Self> {
+        let (Some(nis), Some(innovation)) = (d.nis, d.innovation) else {
+            return None;
+        };
+        Some(Innovation {
+            time: d.applied_at,
+            channel: d.channel,
+            row: d.tag,
+            value: d.value,
+            innovation,
+            nis,
+            disposition: d.disposition,
+        })
+    }
+
+    /// `sqrt(S)`, the innovation's standard deviation as the filter predicted it
+    /// (`|nu| / sqrt(NIS)`), when it is determined (a non-zero, finite NIS).
+    pub fn sigma(&self) -> Option<f64> {
+        let s = self.innovation.abs() / self.nis.sqrt();
+        (self.nis > 0.0 && s.is_finite()).then_some(s)
+    }
+
+    /// Whether the filter applied it.
+    pub fn accepted(&self) -> bool {
+        self.disposition == Disposition::Accepted
+    }
+}
 
 /// The NIS of a set of innovations of `dof` components each.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]

@@ -10,12 +10,29 @@
 //!   ground truth;
 //! - [`ins_dvl`]: INS / DVL navigation on one's own log (PINS, INS-DVL, gated
 //!   INS-DVL, the RPM velocity filter, the 15-state ESKF);
-//! - [`consistency`]: the NIS summaries a replay without ground truth reports;
-//! - [`own_log`]: the front end of `fathom replay range-beacon|ins-dvl <dir>`
-//!   (settings, log, replay, the output texts).
+//! - [`consistency`]: the tested measurements and the NIS summaries a replay reports;
+//! - [`own_log`]: what the two replays of one's own log share as jobs of the runner
+//!   (`fathom replay range-beacon|ins-dvl <dir>`): built-in settings, the log folder,
+//!   the rows and checks, the report's notes;
+//! - [`figures`]: the figures every replay draws (estimate vs truth, error with 3σ,
+//!   innovations with ±3√S, NIS against a consistent filter's interval);
+//! - [`data_dir`]: where a replay's data folder is.
+//!
+//! [`own_log_replays`] lists the own-log replays as jobs ([`range_beacon::RangeBeacon`],
+//! [`ins_dvl::InsDvl`]) for the front ends, beside the paper experiments' registry.
 
 pub mod consistency;
+pub mod data_dir;
+pub mod figures;
 pub mod ins_dvl;
 pub mod own_log;
 pub mod plaza;
 pub mod range_beacon;
+
+use fathom_sim::experiment::DynExperiment;
+
+/// The replays of one's own log as jobs of the runner, in the order `fathom replay`
+/// lists them: `range-beacon`, `ins-dvl`.
+pub fn own_log_replays() -> Vec<&'static dyn DynExperiment> {
+    vec![&range_beacon::RangeBeacon, &ins_dvl::InsDvl]
+}

@@ -3,9 +3,12 @@
 //! without ground truth; corrupted copies (NaN, time going backwards, a missing or an
 //! unknown column, a missing folder) exit with code 2 and one line naming the file,
 //! line and column; the CMU Plaza data converted into the layout replays to the
-//! `replay plaza` numbers (the repository's `data/plaza1`).
+//! `replay plaza` numbers (the repository's `data/plaza1`); every replay (`plaza`,
+//! `range-beacon`, `ins-dvl`) writes the outputs of `fathom run`.
 
 use std::path::Path;
+
+use fathom_report::output::{Summary, read_summary_json};
 
 use crate::support::{fathom, read, repo_root, scratch};
 
@@ -13,6 +16,21 @@ fn ok(dir: &Path, args: &[&str]) -> String {
     let r = fathom(dir, args);
     assert_eq!(r.code, 0, "{args:?}: {}", r.stderr);
     r.stdout
+}
+
+/// The unit and value cells of the console row `method` / `metric` (the table of
+/// `fathom run`: `method | metric | unit | value`), if printed.
+fn console_row(console: &str, method: &str, metric: &str) -> Option<(String, String)> {
+    console.lines().find_map(|l| {
+        let cells: Vec<&str> = l.split('|').map(str::trim).collect();
+        (cells.len() >= 4 && cells[0] == method && cells[1] == metric)
+            .then(|| (cells[2].to_string(), cells[3].to_string()))
+    })
+}
+
+/// The shared `summary.json` of the output folder `dir`.
+fn summary(dir: &Path) -> Summary {
+    read_summary_json(dir.join("summary.json")).expect("summary.json in the shared format")
 }
 
 /// Runs `args`, expects exit code 2 and one error line containing every `want`.
@@ -75,8 +93,14 @@ fn example_logs_replay_with_and_without_truth() {
     );
 
     let out = ok(&root, &["replay", "range-beacon", "rb", "--out", "o-rb"]);
+    // The console is `fathom run`'s table: the error rows in metres, the NIS rows.
+    assert_eq!(
+        console_row(&out, "AS", "mean").map(|c| c.0),
+        Some("m".into()),
+        "{out}"
+    );
     assert!(
-        out.contains("mean [m]") && out.contains("mean NIS"),
+        console_row(&out, "AS", "nis_ranges_mean").is_some(),
         "{out}"
     );
     let report = read(&root.join("o-rb"), "report.md");
@@ -85,18 +109,10 @@ fn example_logs_replay_with_and_without_truth() {
         "{report}"
     );
     // The filters beat dead reckoning on the example (DVL with a 1 % scale error).
-    let summary: serde_json::Value =
-        serde_json::from_str(&read(&root.join("o-rb"), "summary.json")).unwrap();
-    let mean = |name: &str| {
-        summary["methods"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .find(|m| m["name"] == name)
-            .unwrap()["position_error_m"]["mean"]
-            .as_f64()
-            .unwrap()
-    };
+    let s = summary(&root.join("o-rb"));
+    assert_eq!(s.experiment, "range-beacon");
+    assert_eq!(s.extra["error"], "3D");
+    let mean = |name: &str| s.row(name, "mean").expect("mean row").value;
     for m in ["AS", "SC", "SI"] {
         assert!(
             mean(m) < mean("DR"),
@@ -112,7 +128,15 @@ fn example_logs_replay_with_and_without_truth() {
         &root,
         &["replay", "range-beacon", "rb-nt", "--out", "o-rb-nt"],
     );
-    assert!(!out.contains("mean [m]") && out.contains("ranges"), "{out}");
+    // Without truth: no error rows, the NIS rows of the ranges.
+    assert!(
+        console_row(&out, "AS", "mean").is_none()
+            && console_row(&out, "AS", "nis_ranges_mean").is_some(),
+        "{out}"
+    );
+    let s = summary(&root.join("o-rb-nt"));
+    assert!(s.rows.iter().all(|r| r.metric != "rmse"), "{:?}", s.rows);
+    assert_eq!(s.extra["with_truth"], false);
     let report = read(&root.join("o-rb-nt"), "report.md");
     assert!(
         report.contains("no `truth.csv`") && !report.contains("Position error"),
@@ -132,7 +156,8 @@ fn example_logs_replay_with_and_without_truth() {
     assert!(read(&root.join("o-ins"), "report.md").contains("Horizontal position error"));
     let out = ok(&root, &["replay", "ins-dvl", "ins-nt", "--out", "o-ins-nt"]);
     assert!(
-        out.contains("DVL velocity") && !out.contains("mean [m]"),
+        console_row(&out, "VKF", "nis_dvl_velocity_mean").is_some()
+            && console_row(&out, "VKF", "mean").is_none(),
         "{out}"
     );
 
@@ -271,21 +296,33 @@ fn plaza_through_the_layout_gives_the_plaza_numbers() {
         ],
     );
     let native = ok(&root, &["replay", "plaza", &p, "--out", "o2"]);
-    // Same table rows (method, mean, std, max, rmse) for every method.
-    let rows = |text: &str| -> Vec<String> {
-        text.lines()
-            .filter(|l| l.split_whitespace().count() == 6 && !l.starts_with("method"))
-            .filter(|l| {
-                l.split_whitespace()
-                    .nth(1)
-                    .is_some_and(|v| v.parse::<f64>().is_ok())
-            })
-            .map(|l| l.split_whitespace().take(5).collect::<Vec<_>>().join(" "))
-            .collect()
-    };
-    let (a, b) = (rows(&own), rows(&native));
-    assert!(a.len() >= 4, "{own}");
-    assert_eq!(a, b, "own:\n{own}\nnative:\n{native}");
+    // The same rows (method, mean, std, max, rmse) for every method of the converted
+    // log, in the one `summary.json` format both commands write.
+    let (a, b) = (summary(&root.join("o1")), summary(&root.join("o2")));
+    let mut compared = 0;
+    for row in a
+        .rows
+        .iter()
+        .filter(|r| ["mean", "std", "max", "rmse"].contains(&r.metric.as_str()))
+    {
+        let other = b.row(&row.method, &row.metric).unwrap_or_else(|| {
+            panic!(
+                "{} {} not in `replay plaza`:\n{native}",
+                row.method, row.metric
+            )
+        });
+        let tol = 1e-9 * row.value.abs().max(1e-3);
+        assert!(
+            (row.value - other.value).abs() <= tol,
+            "{} {}: own {} vs native {}\nown:\n{own}\nnative:\n{native}",
+            row.method,
+            row.metric,
+            row.value,
+            other.value
+        );
+        compared += 1;
+    }
+    assert!(compared >= 16, "{compared} rows compared:\n{own}");
 }
 
 /// The own-log replays write through the same safe output folder as `fathom run`: a
@@ -348,4 +385,120 @@ fn own_log_replay_keeps_a_users_file_in_out() {
         .filter(|n| n.starts_with(".o2") || n == "o2")
         .collect();
     assert!(stray.is_empty(), "{stray:?}");
+}
+
+/// The rows of the results table of `report.md` (`| method | metric | unit | ... |`,
+/// the first table after the header, one line per row of `summary.json`).
+fn report_rows(report: &str) -> Vec<Vec<String>> {
+    report
+        .lines()
+        .skip_while(|l| !l.starts_with("| method | metric | unit |"))
+        .skip(2)
+        .take_while(|l| l.starts_with('|'))
+        .map(|l| {
+            l.trim_matches('|')
+                .split('|')
+                .map(|c| c.trim().to_string())
+                .collect()
+        })
+        .collect()
+}
+
+/// Every replay (`plaza` on the repository's data, `range-beacon` and `ins-dvl` on
+/// example logs) writes what `fathom run` writes, through the driver: `summary.json`
+/// in the one shared format (every row with a unit in `report.md` and on the
+/// console), `report.md` linking the figures, `run_info.json` with command `replay`,
+/// the settings as given and resolved, and the figures of every replay: the paths
+/// against the truth, the error with 3σ, the innovations and the NIS.
+#[test]
+fn every_replay_writes_the_outputs_of_a_run() {
+    let root = scratch("own-logs-outputs");
+    ok(
+        &root,
+        &["log", "example", "range-beacon", "rb", "--duration", "60"],
+    );
+    ok(
+        &root,
+        &["log", "example", "ins-dvl", "ins", "--duration", "60"],
+    );
+    let plaza = repo_root().join("data/plaza1").display().to_string();
+    let common = ["estimate_vs_truth.svg", "error_3sigma.svg", "nis.svg"];
+    let cases: [(&str, &str, &str, &[&str]); 3] = [
+        ("range-beacon", "rb", "o-rb", &["innovations.svg"]),
+        (
+            "ins-dvl",
+            "ins",
+            "o-ins",
+            &[
+                "innovations_north.svg",
+                "innovations_east.svg",
+                "innovations_down.svg",
+            ],
+        ),
+        ("plaza", &plaza, "o-plaza", &["innovations.svg"]),
+    ];
+    for (kind, data, out, innovations) in cases {
+        let console = ok(&root, &["replay", kind, data, "--out", out]);
+        let dir = root.join(out);
+        let s = summary(&dir);
+        assert_eq!(s.experiment, kind);
+        assert!(!s.rows.is_empty(), "{kind}");
+        // Every row has a unit, in the report's table and on the console.
+        let report = read(&dir, "report.md");
+        let rows = report_rows(&report);
+        assert_eq!(rows.len(), s.rows.len(), "{kind}:\n{report}");
+        for (cells, row) in rows.iter().zip(&s.rows) {
+            assert_eq!((&cells[0], &cells[1]), (&row.method, &row.metric), "{kind}");
+            assert_ne!(
+                cells[2], "-",
+                "{kind}: {} / {} has no unit",
+                row.method, row.metric
+            );
+            let (unit, _) = console_row(&console, &row.method, &row.metric)
+                .unwrap_or_else(|| panic!("{kind}: {} / {} not printed", row.method, row.metric));
+            assert_eq!(unit, cells[2], "{kind}");
+        }
+        assert!(
+            report.contains("one deterministic replay (no Monte Carlo runs, no seed)"),
+            "{kind}:\n{report}"
+        );
+        let info: serde_json::Value =
+            serde_json::from_str(&read(&dir, "run_info.json")).expect("run_info.json");
+        assert_eq!(info["command"], "replay", "{kind}: {info}");
+        assert_eq!(info["experiment"], kind, "{kind}: {info}");
+        let listed: Vec<&str> = info["files"]
+            .as_array()
+            .expect("files")
+            .iter()
+            .filter_map(|f| f.as_str())
+            .collect();
+        for f in common.iter().chain(innovations).chain(&[
+            "summary.json",
+            "report.md",
+            "scenario.toml",
+            "scenario.resolved.toml",
+            "estimates.csv",
+        ]) {
+            assert!(listed.contains(f), "{kind}: {f} not in {listed:?}");
+            assert!(dir.join(f).is_file(), "{kind}: {f} missing");
+            if f.ends_with(".svg") {
+                assert!(
+                    read(&dir, f).trim_start().starts_with("<svg"),
+                    "{kind}: {f}"
+                );
+                assert!(
+                    report.contains(&format!("- [{f}]({f})")),
+                    "{kind}: {f} not linked"
+                );
+            }
+        }
+    }
+    // The settings written beside the outputs replay again with `fathom run`, to the
+    // same rows.
+    let again = ok(&root, &["run", "o-rb/scenario.toml", "--out", "o-rb-again"]);
+    assert!(console_row(&again, "AS", "rmse").is_some(), "{again}");
+    assert_eq!(
+        summary(&root.join("o-rb-again")).rows,
+        summary(&root.join("o-rb")).rows
+    );
 }

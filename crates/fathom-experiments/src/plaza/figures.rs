@@ -1,9 +1,13 @@
-//! The Plaza figures (paths, errors, ablation, range errors, calibration) and CSV
-//! files (estimates, ranges with each scheme's decision).
+//! The Plaza figures (those every replay draws: estimate vs truth, error with 3σ,
+//! innovations, NIS; then errors, ablation, range errors, calibration) and CSV files
+//! (estimates, ranges with each scheme's decision).
 
 use fathom_estimators::schemes::Disposition;
 
 use super::analysis::{MAIN_METHODS, smoothed_name};
+use fathom_replay::figures::{
+    ErrorTrack, InnovationTrack, Path, Tested, error_3sigma, innovations, nis, plan_view, thin,
+};
 use fathom_replay::plaza::{Calibration, MethodRun, PlazaReplay};
 use fathom_report::output::{CsvCell, fixed as f};
 use fathom_report::plot::{Histogram, LinePlot, PlanPlot, Series};
@@ -113,38 +117,93 @@ fn write_csv(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
     out.csv_records("ranges.csv", &h, &records)
 }
 
-fn xy_series(name: &str, pts: impl Iterator<Item = (f64, f64)>) -> Series {
-    Series::new(name, pts.collect())
-}
+/// The methods of the plan view and the error figures, in drawing order.
+const SHOWN: [&str; 4] = ["DR", "AS", "SC", "SI"];
 
-fn thin(n: usize) -> usize {
-    (n / 2500).max(1)
+/// The figures every replay draws ([`fathom_replay::figures`]): the plan view, the
+/// error with each filter's 3σ, and the main methods' range innovations and NIS.
+fn write_replay_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
+    let p = &r.prepared;
+    let shown: Vec<(usize, &MethodRun)> = SHOWN
+        .iter()
+        .filter_map(|n| r.method(n))
+        .enumerate()
+        .collect();
+    let paths: Vec<Path<'_>> = shown
+        .iter()
+        .map(|(k, m)| Path {
+            name: &m.name,
+            color: *k,
+            points: m.est.iter().map(|e| (e[0], e[1])).collect(),
+        })
+        .collect();
+    let truth: Vec<(f64, f64)> = p.eval.iter().map(|e| (e.1, e.2)).collect();
+    let beacons = Series::new("beacons", r.beacons.iter().map(|b| (b.x, b.y)).collect());
+    plan_view(
+        out,
+        "estimate_vs_truth.svg",
+        &format!("{}: estimated and true path", r.data_name),
+        ("x (m)", "y (m)"),
+        &truth,
+        &paths,
+        Some(beacons),
+    )?;
+    let time: Vec<f64> = p.eval.iter().map(|e| e.0).collect();
+    let tracks: Vec<ErrorTrack<'_>> = shown
+        .iter()
+        .map(|(k, m)| ErrorTrack {
+            name: &m.name,
+            color: *k,
+            errors: &m.err,
+            sigma: (m.pos_sigma.len() == m.err.len()).then_some(&m.pos_sigma[..]),
+        })
+        .collect();
+    error_3sigma(
+        out,
+        "error_3sigma.svg",
+        &format!("{}: 2D position error with the filter's 3σ", r.data_name),
+        &time,
+        &tracks,
+    )?;
+    let tested: Vec<InnovationTrack<'_>> = shown
+        .iter()
+        .filter(|(_, m)| !m.innovations.is_empty())
+        .map(|(k, m)| InnovationTrack {
+            name: &m.name,
+            color: *k,
+            tested: m
+                .innovations
+                .iter()
+                .map(|i| Tested {
+                    time: i.time,
+                    innovation: Some(i.innovation),
+                    sigma: i.sigma(),
+                    nis: i.nis,
+                })
+                .collect(),
+        })
+        .collect();
+    innovations(
+        out,
+        "innovations.svg",
+        &format!("{}: range innovations", r.data_name),
+        "innovation (m)",
+        &tested,
+    )?;
+    nis(
+        out,
+        "nis.svg",
+        &format!("{}: range NIS", r.data_name),
+        1,
+        &tested,
+    )?;
+    Ok(())
 }
 
 fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
+    write_replay_figures(r, out)?;
     let p = &r.prepared;
     let step = thin(p.eval.len());
-    let truth = xy_series(
-        "ground truth",
-        p.eval.iter().step_by(step).map(|e| (e.1, e.2)),
-    );
-    let beacons = Series::new("beacons", r.beacons.iter().map(|b| (b.x, b.y)).collect());
-    let mut plan = PlanPlot::new(
-        format!("{}: estimated and true path", r.data_name),
-        "x (m)",
-        "y (m)",
-    )
-    .with_path(truth);
-    for name in ["DR", "AS", "SC", "SI"] {
-        if let Some(m) = r.method(name) {
-            plan = plan.with_path(xy_series(
-                name,
-                m.est.iter().step_by(step).map(|e| (e[0], e[1])),
-            ));
-        }
-    }
-    out.figure("path.svg", &plan.with_markers(beacons))?;
-
     let time: Vec<f64> = p.eval.iter().map(|e| e.0).collect();
     let err_series = |m: &MethodRun| {
         Series::new(
@@ -161,7 +220,7 @@ fn write_figures(r: &PlazaReplay, out: &mut Analysis) -> Result<(), SimError> {
         "time since start (s)",
         "error (m)",
     );
-    for name in ["DR", "AS", "SC", "SI"] {
+    for name in SHOWN {
         if let Some(m) = r.method(name) {
             plot = plot.with_series(err_series(m));
         }

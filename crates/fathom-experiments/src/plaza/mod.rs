@@ -18,11 +18,12 @@ mod cost;
 mod figures;
 mod report;
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use rand_chacha::ChaCha8Rng;
 
 use fathom_data::plaza::PlazaLog;
+pub use fathom_replay::data_dir::find_data_dir;
 use fathom_replay::plaza::{PlazaReplay, PlazaSettings, PlazaToml, replay};
 use fathom_sim::SimError;
 use fathom_sim::cost::CostTerm;
@@ -164,51 +165,5 @@ impl Experiment for Plaza {
         ));
         out.report(&report::report_section(&r));
         Ok(())
-    }
-}
-
-/// The data folder `dir` inside `workspace_root` (for `fathom run`, the current
-/// directory) or beside one of its ancestors, the nearest first (an absolute `dir` is
-/// used as it is), if it exists.
-pub fn find_data_dir(workspace_root: &Path, dir: &str) -> Option<PathBuf> {
-    let rel = Path::new(dir);
-    if rel.is_absolute() {
-        return rel.is_dir().then(|| rel.to_path_buf());
-    }
-    workspace_root
-        .ancestors()
-        .map(|a| a.join(rel))
-        .find(|p| p.is_dir())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn data_dir_is_found_inside_the_root_or_beside_an_ancestor_nearest_first() {
-        let base = std::env::temp_dir()
-            .join("fathom-sim-tests")
-            .join(format!("plaza-find-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&base);
-        let root = base.join("a").join("repo");
-        std::fs::create_dir_all(&root).unwrap();
-        assert_eq!(find_data_dir(&root, "outside/data/x"), None);
-        std::fs::create_dir_all(base.join("outside/data/x")).unwrap();
-        assert_eq!(
-            find_data_dir(&root, "outside/data/x"),
-            Some(base.join("outside/data/x"))
-        );
-        // Inside the root (a user's `data/` next to their scenario) counts, and wins
-        // over the same name further up.
-        std::fs::create_dir_all(root.join("inside")).unwrap();
-        assert_eq!(find_data_dir(&root, "inside"), Some(root.join("inside")));
-        std::fs::create_dir_all(root.join("outside/data/x")).unwrap();
-        assert_eq!(
-            find_data_dir(&root, "outside/data/x"),
-            Some(root.join("outside/data/x"))
-        );
-        let abs = base.join("outside/data/x");
-        assert_eq!(find_data_dir(&root, abs.to_str().unwrap()), Some(abs));
     }
 }

@@ -9,12 +9,22 @@
 //! and the truth is interpolated linearly to that row's time. Every velocity and
 //! depth update's innovation and NIS are kept ([`Update`]): without truth they are
 //! what the report shows.
+//!
+//! [`InsDvl`] runs it as a job of the runner (`fathom replay ins-dvl DIR`): settings
+//! -> log -> replay ([`replay`], [`run`]) -> rows, checks and CSV files -> figures ->
+//! report notes, each step in its own file.
 
+mod analysis;
+mod figures;
 pub mod filter_tables;
+mod job;
+mod report;
 mod run;
 mod settings;
 #[cfg(test)]
 mod tests;
+
+pub use job::{InsDvl, Prepared};
 
 pub use settings::{
     DepthSigmaToml, DvlAidToml, EskfTuningToml, ImuModelToml, InsDvlMethodToml, InsDvlSettings,
@@ -39,6 +49,10 @@ pub struct Update {
     /// Measurement minus prediction (velocity NED m/s, or `[depth m, 0, 0]`), when the
     /// update was applied.
     pub innovation: Option<[f64; 3]>,
+    /// The square roots of the innovation covariance's diagonal, `sqrt(S_ii)`, in the
+    /// innovation's units (`[sqrt(S), 0, 0]` for depth), when the update was applied.
+    #[serde(default)]
+    pub innovation_sigma: Option<[f64; 3]>,
     /// Whether it passed the gate.
     pub accepted: bool,
     /// Whether the aid was the RPM speed (the switching box's choice).
@@ -46,12 +60,13 @@ pub struct Update {
 }
 
 impl Update {
-    /// A depth update (always applied).
-    pub fn depth(time: f64, innovation: f64, nis: f64) -> Self {
+    /// A depth update (always applied) with innovation variance `s`.
+    pub fn depth(time: f64, innovation: f64, s: f64, nis: f64) -> Self {
         Self {
             time,
             nis,
             innovation: Some([innovation, 0.0, 0.0]),
+            innovation_sigma: Some([s.max(0.0).sqrt(), 0.0, 0.0]),
             accepted: true,
             rpm: false,
         }
@@ -210,12 +225,48 @@ fn instants(log: &InsDvlLog, period: f64) -> Result<Vec<f64>, SimError> {
         .collect())
 }
 
+/// `truth.csv` does not cover the IMU rows the filters are recorded after.
+fn truth_not_covering() -> SimError {
+    SimError::invalid_argument(
+        "log `truth.csv`",
+        "does not cover the IMU data it is compared with: its first row must be at or \
+         before the first IMU row after the start",
+    )
+}
+
+/// What [`replay`] refuses about `log` before it runs a filter (the user's log or
+/// settings, not a failing filter): nothing to record, or a `truth.csv` that starts
+/// after the first IMU row the filters are recorded after ([`run::run`]: the last IMU
+/// row after the start at or before the first instant, else the start).
+///
+/// # Errors
+/// [`SimError::InvalidArgument`] naming the file or key.
+pub fn check(log: &InsDvlLog, settings: &InsDvlSettings) -> Result<(), SimError> {
+    let record = instants(log, settings.output_period)?;
+    if let (Some(rows), Some(&first)) = (&log.truth, record.first()) {
+        let t0 = log.start.time;
+        let recorded = log
+            .imu
+            .iter()
+            .filter(|r| r.0 > t0)
+            .map(|r| r.0 - t0)
+            .take_while(|&t| t <= first)
+            .last()
+            .unwrap_or(0.0);
+        if truth_at(rows, recorded + t0).is_none() {
+            return Err(truth_not_covering());
+        }
+    }
+    Ok(())
+}
+
 /// Replays every method of `settings` on `log`.
 ///
 /// # Errors
-/// [`SimError::InvalidArgument`] for a log with nothing to record,
-/// [`SimError::Model`] naming the method, component and time of a failing step.
+/// As [`check`]; [`SimError::Model`] naming the method, component and time of a
+/// failing step.
 pub fn replay(log: &InsDvlLog, settings: &InsDvlSettings) -> Result<InsDvlReplay, SimError> {
+    check(log, settings)?;
     let record = instants(log, settings.output_period)?;
     let (traces, times) = run::run(log, settings, &record)?;
     let t0 = log.start.time;
@@ -228,11 +279,7 @@ pub fn replay(log: &InsDvlLog, settings: &InsDvlSettings) -> Result<InsDvlReplay
                 let vel: Option<Vec<[f64; 3]>> = at.iter().flatten().map(|a| a.1).collect();
                 (Some(pos), vel)
             } else {
-                return Err(SimError::invalid_argument(
-                    "log `truth.csv`",
-                    "does not cover the IMU data it is compared with: its first row must be at or \
-                     before the first IMU row after the start",
-                ));
+                return Err(truth_not_covering());
             }
         }
     };

@@ -129,6 +129,9 @@ fn record_gate(gate: Gate<3>, time: f64, source_rpm: bool) -> Update {
             time,
             nis: info.nis,
             innovation: Some(info.innovation.into()),
+            innovation_sigma: Some(std::array::from_fn(|i| {
+                info.innovation_cov[(i, i)].max(0.0).sqrt()
+            })),
             accepted: true,
             rpm: source_rpm,
         },
@@ -136,6 +139,7 @@ fn record_gate(gate: Gate<3>, time: f64, source_rpm: bool) -> Update {
             time,
             nis,
             innovation: None,
+            innovation_sigma: None,
             accepted: false,
             rpm: source_rpm,
         },
@@ -392,6 +396,7 @@ pub fn run(
                             tr.depth_updates.push(Update::depth(
                                 t_imu,
                                 info.innovation[0],
+                                info.innovation_cov[(0, 0)],
                                 info.nis,
                             ));
                         }
@@ -405,6 +410,7 @@ pub fn run(
                             tr.depth_updates.push(Update::depth(
                                 t_imu,
                                 -info.innovation[0],
+                                info.innovation_cov[(0, 0)],
                                 info.nis,
                             ));
                             e.feedback(t_imu)?;

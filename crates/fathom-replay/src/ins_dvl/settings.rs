@@ -442,6 +442,9 @@ impl InsDvlToml {
     }
 }
 
+// A deterministic scenario: no `runs`, no `base_seed` (one replay of a recorded log).
+fathom_sim::deterministic_scenario!(InsDvlToml);
+
 /// Parses and checks a settings text (`file` labels error messages).
 ///
 /// # Errors

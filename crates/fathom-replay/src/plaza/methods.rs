@@ -16,6 +16,7 @@ use nalgebra::{DMatrix, SMatrix, SVector};
 
 use super::prepare::{Kind, PreparedLog};
 use super::settings::{Calibration, OutlierHandling, PlazaSettings, Variant};
+use crate::consistency::Innovation;
 use fathom_sim::SimError;
 
 /// The result of one method on the log.
@@ -53,6 +54,10 @@ pub struct MethodRun {
     /// Per range of the log (index as in [`PlazaLog::ranges`]): the decision, if the
     /// range was processed.
     pub decisions: Vec<Option<Disposition>>,
+    /// Every tested range in processing order, with its innovation and NIS (empty for
+    /// dead reckoning).
+    #[serde(default)]
+    pub innovations: Vec<Innovation>,
     /// The RTS-smoothed estimates of the same filter (`smooth = true`; `None` for dead
     /// reckoning or when smoothing is off).
     #[serde(default)]
@@ -134,6 +139,7 @@ fn finish(
         downweighted: 0,
         recoveries: 0,
         decisions: Vec::new(),
+        innovations: Vec::new(),
         smoothed: None,
     })
 }
@@ -412,6 +418,11 @@ pub fn run_variant(
         }
     }
     run.decisions = decisions;
+    run.innovations = t
+        .decisions
+        .iter()
+        .filter_map(Innovation::of_decision)
+        .collect();
     run.downweighted = t.downweighted;
     run.recoveries = t.recoveries;
     run.smoothed = t.smoothed;

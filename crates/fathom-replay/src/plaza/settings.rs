@@ -603,17 +603,5 @@ impl PlazaSettings {
     }
 }
 
-/// A deterministic scenario: no `runs`, no `base_seed` (one replay of a recorded log).
-impl fathom_sim::experiment::ScenarioFile for PlazaToml {
-    fn experiment(&self) -> &str {
-        &self.experiment
-    }
-    fn runs(&self) -> Option<usize> {
-        None
-    }
-    fn set_runs(&mut self, _runs: usize) {}
-    fn base_seed(&self) -> Option<u64> {
-        None
-    }
-    fn set_base_seed(&mut self, _seed: u64) {}
-}
+// A deterministic scenario: no `runs`, no `base_seed` (one replay of a recorded log).
+fathom_sim::deterministic_scenario!(PlazaToml);

@@ -134,18 +134,16 @@ fn events(log: &RangeBeaconLog, with_measurements: bool) -> (Vec<Ev>, DvlAhrsInp
     (ev.into_iter().map(|e| e.2).collect(), initial)
 }
 
-/// Runs `method` on a DVL + heading log, recording at `plan`'s instants.
+/// The motion noise of a DVL + heading log: the settings' sigmas held over the median
+/// interval of each file.
 ///
 /// # Errors
-/// [`SimError::InvalidArgument`] for a calibration other than none (the 3D EKF has
-/// no calibration states) or too few DVL / heading rows to know their interval;
-/// [`SimError::Model`] wrapping estimator errors with the method's name.
-pub fn run_method(
+/// [`SimError::InvalidArgument`] for an odometry log, or too few DVL / heading rows to
+/// know their interval.
+fn motion_params(
     log: &RangeBeaconLog,
     s: &RangeBeaconSettings,
-    method: &MethodSpec,
-    plan: &EvalPlan,
-) -> Result<MethodTrace, SimError> {
+) -> Result<DvlAhrsMotionParams, SimError> {
     let Motion::Dvl { dvl, heading } = &log.motion else {
         return Err(SimError::invalid_argument(
             "DVL replay",
@@ -160,33 +158,63 @@ pub fn run_method(
             )
         })
     };
-    let e = &s.engine;
-    let params = DvlAhrsMotionParams {
+    Ok(DvlAhrsMotionParams {
         vel_sigma: s.dvl_velocity_sigma,
         vel_hold: hold("dvl.csv", dvl.iter().map(|r| r.0).collect())?,
         yaw_rate_sigma: s.yaw_rate_sigma,
         yaw_rate_hold: hold("heading.csv", heading.iter().map(|r| r.0).collect())?,
-    };
+    })
+}
+
+/// What [`run_method`] refuses before it runs: a DVL + heading log with too few rows
+/// to know the motion noise's hold times, or a method asking for range calibration
+/// states, which the 3D EKF does not have.
+///
+/// # Errors
+/// [`SimError::InvalidArgument`] naming the file or the method.
+pub fn check_method(
+    log: &RangeBeaconLog,
+    s: &RangeBeaconSettings,
+    method: &MethodSpec,
+) -> Result<(), SimError> {
+    motion_params(log, s)?;
+    match &method.kind {
+        MethodKind::Ekf(v) if v.calibration != Calibration::None => {
+            Err(SimError::invalid_argument(
+                format!("method `{}`", method.name),
+                format!(
+                    "calibration = \"{}\" needs an odometry log: the DVL + heading EKF has no \
+                     range calibration states; use calibration = \"none\"",
+                    v.calibration.name()
+                ),
+            ))
+        }
+        _ => Ok(()),
+    }
+}
+
+/// Runs `method` on a DVL + heading log, recording at `plan`'s instants.
+///
+/// # Errors
+/// As [`check_method`]; [`SimError::Model`] wrapping estimator errors with the
+/// method's name.
+pub fn run_method(
+    log: &RangeBeaconLog,
+    s: &RangeBeaconSettings,
+    method: &MethodSpec,
+    plan: &EvalPlan,
+) -> Result<MethodTrace, SimError> {
+    check_method(log, s, method)?;
+    let params = motion_params(log, s)?;
+    let e = &s.engine;
     let ctx = |e| SimError::model(format!("method `{}`", method.name), e);
     let motion = params.check().map_err(ctx)?;
     let (scheme, gate_sigma, robust) = match &method.kind {
         MethodKind::DeadReckoning => (UpdateScheme::Asynchronous, None, false),
-        MethodKind::Ekf(v) => {
-            if v.calibration != Calibration::None {
-                return Err(SimError::invalid_argument(
-                    format!("method `{}`", method.name),
-                    format!(
-                        "calibration = \"{}\" needs an odometry log: the DVL + heading EKF has no \
-                         range calibration states; use calibration = \"none\"",
-                        v.calibration.name()
-                    ),
-                ));
-            }
-            match v.outliers {
-                OutlierHandling::Robust => (v.scheme, Some(e.reject_sigma), true),
-                OutlierHandling::HardGate(g) => (v.scheme, Some(g), false),
-            }
-        }
+        MethodKind::Ekf(v) => match v.outliers {
+            OutlierHandling::Robust => (v.scheme, Some(e.reject_sigma), true),
+            OutlierHandling::HardGate(g) => (v.scheme, Some(g), false),
+        },
     };
     let st = &log.start;
     let x0 = Vector4::new(

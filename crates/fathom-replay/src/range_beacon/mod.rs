@@ -14,13 +14,23 @@
 //! every `[output] period_s` from the start to the last stamp of the log. Every
 //! range's innovation and NIS are kept ([`Innovation`]): without truth they are what
 //! the report shows.
+//!
+//! [`RangeBeacon`] runs it as a job of the runner (`fathom replay range-beacon DIR`):
+//! settings -> log -> replay ([`replay`]) -> rows, checks and CSV files -> figures ->
+//! report notes, each step in its own file.
 
+mod analysis;
 pub mod dvl;
+mod figures;
+mod job;
+mod report;
 mod settings;
 #[cfg(test)]
 mod tests;
 
 pub use crate::plaza::RangeNoiseToml;
+pub use job::{Prepared, RangeBeacon};
+
 pub use settings::{
     DepthNoiseToml, DvlMotionToml, InitialSigmaToml, LogDirToml, MethodKind, MethodSpec,
     OutputToml, RangeBeaconMethodToml, RangeBeaconSettings, RangeBeaconToml, default_methods,
@@ -30,6 +40,8 @@ pub use settings::{
 use fathom_estimators::schemes::{ChannelCounts, Decision, Disposition};
 use fathom_stats::RunStats;
 use nalgebra::Vector2;
+
+pub use crate::consistency::Innovation;
 
 use crate::consistency::NisSummary;
 use crate::plaza::{PreparedLog, trace_dead_reckoning, trace_variant};
@@ -130,25 +142,6 @@ fn last_stamp(log: &RangeBeaconLog) -> f64 {
     .fold(log.start.time, f64::max)
 }
 
-/// One tested measurement: its innovation and NIS.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Innovation {
-    /// Filter time it was processed at, `t - t0`, s.
-    pub time: f64,
-    /// Beacon row (channel), or the number of beacons for depth.
-    pub channel: usize,
-    /// Row of the measurement in its file (0-based, data rows only).
-    pub row: usize,
-    /// The measured value, m.
-    pub value: f64,
-    /// `z - h(x)` at the prior, m.
-    pub innovation: f64,
-    /// `nu^2 / S`.
-    pub nis: f64,
-    /// Accepted or rejected.
-    pub disposition: Disposition,
-}
-
 /// What one method produced.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct MethodTrace {
@@ -198,17 +191,8 @@ impl MethodTrace {
     /// is depth.
     pub fn set_decisions(&mut self, decisions: &[Decision], depth_channel: usize) {
         for d in decisions {
-            let (Some(nis), Some(innovation)) = (d.nis, d.innovation) else {
+            let Some(i) = Innovation::of_decision(d) else {
                 continue;
-            };
-            let i = Innovation {
-                time: d.applied_at,
-                channel: d.channel,
-                row: d.tag,
-                value: d.value,
-                innovation,
-                nis,
-                disposition: d.disposition,
             };
             if d.channel == depth_channel {
                 self.depths.push(i);
@@ -323,12 +307,27 @@ fn run_odometry(
     Ok(out)
 }
 
+/// What [`replay`] refuses about `log` before it runs an estimator (the user's log or
+/// settings, not a failing estimator): nothing to record, or a method the log cannot
+/// run ([`dvl::check_method`]).
+///
+/// # Errors
+/// [`SimError::InvalidArgument`] naming the file, key or method.
+pub fn check(log: &RangeBeaconLog, settings: &RangeBeaconSettings) -> Result<(), SimError> {
+    EvalPlan::of(log, settings.output_period)?;
+    if !matches!(log.motion, Motion::Odometry(_)) {
+        for spec in &settings.methods {
+            dvl::check_method(log, settings, &spec.for_log(false))?;
+        }
+    }
+    Ok(())
+}
+
 /// Replays every method of `settings` on `log`.
 ///
 /// # Errors
-/// [`SimError::InvalidArgument`] for a log with nothing to record or a method the
-/// log cannot run (module docs of [`dvl`]), [`SimError::Model`] wrapping estimator
-/// errors with the method's name.
+/// As [`check`]; [`SimError::Model`] wrapping estimator errors with the method's
+/// name.
 pub fn replay(
     log: &RangeBeaconLog,
     settings: &RangeBeaconSettings,

@@ -395,6 +395,9 @@ fn check_method(file: &str, i: usize, m: &RangeBeaconMethodToml) -> Result<Metho
     })
 }
 
+// A deterministic scenario: no `runs`, no `base_seed` (one replay of a recorded log).
+fathom_sim::deterministic_scenario!(RangeBeaconToml);
+
 /// Parses and checks a settings text (`file` labels error messages).
 ///
 /// # Errors

@@ -30,6 +30,8 @@ pub struct LinePlot {
     /// 95 % CI bands `(x, lo, hi)` of mean curves, each with the index of its series
     /// (drawn in its colour, named in the legend).
     pub bands: Vec<(usize, Band)>,
+    /// What the bands are: their legend entry (default `band: 95 % CI of the mean`).
+    pub band_label: String,
     /// Fixed y range `(lo, hi)`; `None` fits the data.
     pub y_range: Option<(f64, f64)>,
     /// Fixed x range `(lo, hi)` (e.g. a zoom window); `None` fits the data.
@@ -55,6 +57,7 @@ impl LinePlot {
             markers_x: Vec::new(),
             markers_label: String::new(),
             bands: Vec::new(),
+            band_label: "band: 95 % CI of the mean".to_string(),
             y_range: None,
             x_range: None,
             size: DEFAULT_SIZE,
@@ -86,12 +89,19 @@ impl LinePlot {
             .map_or_else(|| series_color(k), |s| s.color_at(k))
     }
 
-    /// Add the 95 % CI band `(x, lo, hi)` of series `series` (a mean curve); an empty
-    /// band is ignored.
+    /// Add the band `(x, lo, hi)` of series `series` (the 95 % CI of a mean curve, or
+    /// what [`LinePlot::with_band_label`] says); an empty band is ignored.
     pub fn with_band(mut self, series: usize, band: Band) -> Self {
         if !band.is_empty() {
             self.bands.push((series, band));
         }
+        self
+    }
+
+    /// Name the bands in the legend (e.g. `band: ±3σ of the filter`), when they are
+    /// not the default 95 % intervals of mean curves.
+    pub fn with_band_label(mut self, label: impl Into<String>) -> Self {
+        self.band_label = label.into();
         self
     }
 
@@ -162,7 +172,7 @@ impl LinePlot {
         }
         if let Some((k, _)) = self.bands.first() {
             entries.push(Entry {
-                label: "band: 95 % CI of the mean".to_string(),
+                label: self.band_label.clone(),
                 swatch: Swatch::Band(self.color_of(*k)),
             });
         }

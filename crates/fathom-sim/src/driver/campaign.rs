@@ -431,6 +431,7 @@ pub fn merge(
     let executed = assessed.execute_from(&mut source)?;
     let elapsed = start.elapsed();
     let mut result = write_executed(
+        exp,
         &executed,
         &first.scenario_label,
         &setup,

@@ -65,6 +65,12 @@ pub struct ExperimentResult {
     /// The figure and CSV files written, as the analysis made them (in its order):
     /// what the Python bindings hand on without reading the files back.
     pub files: Vec<OutputFile>,
+    /// Whether the experiment reproduces a paper ([`DynExperiment::paper`]); a job on
+    /// the user's own data compares its settings with the built-in ones instead.
+    pub paper: bool,
+    /// Whether the job is deterministic (no Monte Carlo runs, no seed: a replay of
+    /// recorded data).
+    pub deterministic: bool,
 }
 
 /// The whole error chain of `e` joined with `": "` (like anyhow's `{:#}`).
@@ -148,7 +154,7 @@ pub fn execute_assessed_to(
     let start = Instant::now();
     let executed = assessed.execute()?;
     let elapsed = start.elapsed();
-    let mut result = write_executed(&executed, job.file, &setup, claim.dir(), elapsed)?;
+    let mut result = write_executed(exp, &executed, job.file, &setup, claim.dir(), elapsed)?;
     if options.scenario_files {
         write_text(claim.dir().join("scenario.toml"), job.text)?;
         write_text(
@@ -196,13 +202,20 @@ impl ExperimentResult {
     }
 }
 
+/// Writes the figures, CSV files, `summary.json` and `report.md` of `executed` (an
+/// execution of `exp`) into `out_dir`.
 pub(crate) fn write_executed(
+    exp: &dyn DynExperiment,
     executed: &Executed,
     scenario_label: &str,
     setup: &Setup,
     out_dir: &Path,
     elapsed: Duration,
 ) -> Result<ExperimentResult, SimError> {
+    let framing = report::Framing {
+        paper: exp.paper(),
+        deterministic: executed.resolved.base_seed.is_none(),
+    };
     let mut figures = Vec::new();
     for f in executed.analysis.files() {
         let path = out_dir.join(&f.name);
@@ -214,8 +227,14 @@ pub(crate) fn write_executed(
     figures.sort();
     let summary = &executed.summary;
     write_summary_json(out_dir.join("summary.json"), summary)?;
-    let md =
-        report::experiment_report(summary, scenario_label, &executed.analysis, setup, &figures);
+    let md = report::experiment_report(
+        summary,
+        scenario_label,
+        &executed.analysis,
+        setup,
+        framing,
+        &figures,
+    );
     write_text(out_dir.join("report.md"), &md)?;
     Ok(ExperimentResult {
         name: summary.experiment.clone(),
@@ -227,6 +246,8 @@ pub(crate) fn write_executed(
         skipped: executed.analysis.skipped.clone(),
         units: executed.analysis.units.clone(),
         setup: setup.clone(),
+        paper: framing.paper,
+        deterministic: framing.deterministic,
         // Moved in by the caller, which owns the analysis (no copy of the tables).
         files: Vec::new(),
     })

@@ -66,11 +66,38 @@ pub fn fmt_value(x: f64, unit: &str) -> String {
     Style::of(x, unit).fmt(x)
 }
 
-/// The cells of one row: method, metric, unit, paper, value, 95 % CI.
-fn row_cells(r: &Row, units: &BTreeMap<String, String>) -> Vec<String> {
+/// What kind of job a report is about: one that reproduces a paper (its preset is the
+/// paper's setup) or one on the user's own data (its preset is only the built-in
+/// settings); a Monte Carlo experiment or a deterministic replay.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Framing {
+    /// [`crate::experiment::DynExperiment::paper`].
+    pub(crate) paper: bool,
+    /// No Monte Carlo runs and no seed.
+    pub(crate) deterministic: bool,
+}
+
+impl Framing {
+    fn of(r: &ExperimentResult) -> Self {
+        Framing {
+            paper: r.paper,
+            deterministic: r.deterministic,
+        }
+    }
+}
+
+/// Whether the results table has the interval column: a paper's job always shows it
+/// (and the paper's number); a job on the user's own data shows the value, and the
+/// interval only when a row has one.
+fn with_ci_column(framing: Framing, rows: &[Row]) -> bool {
+    framing.paper || rows.iter().any(|r| r.ci95.is_some())
+}
+
+/// The cells of one row: method, metric, unit, (paper,) value(, 95 % CI).
+fn row_cells(r: &Row, units: &BTreeMap<String, String>, paper: bool, ci: bool) -> Vec<String> {
     let unit = units.get(&r.metric).map_or("", String::as_str);
     let style = Style::of(r.value, unit);
-    vec![
+    let mut cells = vec![
         r.method.clone(),
         r.metric.clone(),
         if unit.is_empty() {
@@ -78,33 +105,51 @@ fn row_cells(r: &Row, units: &BTreeMap<String, String>) -> Vec<String> {
         } else {
             unit.into()
         },
-        r.paper.map_or_else(|| "—".into(), |p| style.fmt(p)),
-        style.fmt(r.value),
-        r.ci95.map_or_else(
+    ];
+    if paper {
+        cells.push(r.paper.map_or_else(|| "—".into(), |p| style.fmt(p)));
+    }
+    cells.push(style.fmt(r.value));
+    if ci {
+        cells.push(r.ci95.map_or_else(
             || "—".into(),
             |[lo, hi]| format!("[{}, {}]", style.fmt(lo), style.fmt(hi)),
-        ),
-    ]
+        ));
+    }
+    cells
+}
+
+/// Every row of `rows` as table cells, with the headers, for `setup` and `framing`.
+fn table(
+    rows: &[Row],
+    units: &BTreeMap<String, String>,
+    setup: &Setup,
+    framing: Framing,
+) -> (Vec<&'static str>, Vec<Vec<String>>) {
+    let (paper, ci) = (framing.paper, with_ci_column(framing, rows));
+    let cells = rows
+        .iter()
+        .map(|r| row_cells(r, units, paper, ci))
+        .collect();
+    (headers(setup, paper, ci), cells)
 }
 
 /// Column headers of the results table for `setup`.
-fn headers(setup: &Setup) -> [&'static str; 6] {
-    if setup.is_paper() {
-        ["method", "metric", "unit", "paper", "reproduced", "95% CI"]
-    } else {
-        [
-            "method",
-            "metric",
-            "unit",
-            "paper's setup",
-            "your scenario",
-            "95% CI",
-        ]
+fn headers(setup: &Setup, paper: bool, ci: bool) -> Vec<&'static str> {
+    let mut h = vec!["method", "metric", "unit"];
+    match (paper, setup.is_paper()) {
+        (true, true) => h.extend(["paper", "reproduced"]),
+        (true, false) => h.extend(["paper's setup", "your scenario"]),
+        (false, _) => h.push("value"),
     }
+    if ci {
+        h.push("95% CI");
+    }
+    h
 }
 
-fn verdict(c: &Claim, setup: &Setup) -> &'static str {
-    match (c.holds, setup.is_paper()) {
+fn verdict(c: &Claim, setup: &Setup, framing: Framing) -> &'static str {
+    match (c.holds, setup.is_paper() || !framing.paper) {
         (true, true) => "holds",
         (false, true) => "does not hold",
         (true, false) => "holds here",
@@ -113,8 +158,18 @@ fn verdict(c: &Claim, setup: &Setup) -> &'static str {
 }
 
 /// The sentence that says which setup the numbers are for.
-fn setup_sentence(s: &Summary, setup: &Setup) -> String {
+fn setup_sentence(s: &Summary, setup: &Setup, framing: Framing) -> String {
     let preset = format!("`scenarios/{}.toml`", s.experiment);
+    if !framing.paper {
+        return if setup.is_paper() {
+            format!("Settings: the built-in ones ({preset}).")
+        } else {
+            format!(
+                "Settings: yours; they differ from the built-in ones ({preset}) in {}.",
+                setup.keys_text(usize::MAX)
+            )
+        };
+    }
     if setup.is_paper() {
         format!("Setup: the paper's setup ({preset}).")
     } else {
@@ -134,33 +189,42 @@ pub(crate) fn experiment_report(
     scenario_label: &str,
     analysis: &Analysis,
     setup: &Setup,
+    framing: Framing,
     figures: &[PathBuf],
 ) -> String {
+    let doc = if framing.paper {
+        "Seed paper"
+    } else {
+        "Documentation"
+    };
+    let what = if framing.deterministic {
+        "one deterministic replay (no Monte Carlo runs, no seed)".to_string()
+    } else {
+        format!("Monte Carlo runs: {} · base seed: {}", s.runs, s.base_seed)
+    };
     let mut md = format!(
-        "# {}\n\nSeed paper: `{}` · Monte Carlo runs: {} · base seed: {} · scenario: `{}`\n\n",
-        s.experiment, s.seed_doc, s.runs, s.base_seed, scenario_label,
+        "# {}\n\n{doc}: `{}` · {what} · scenario: `{}`\n\n",
+        s.experiment, s.seed_doc, scenario_label,
     );
-    md.push_str(&setup_sentence(s, setup));
+    md.push_str(&setup_sentence(s, setup, framing));
     md.push_str("\n\n");
     if let Some(reason) = &analysis.skipped {
         md.push_str(&format!("**Skipped:** {reason}\n\n"));
     }
-    md.push_str(if setup.is_paper() {
-        "## Paper versus reproduced\n\n"
-    } else {
-        "## Your scenario\n\n"
+    md.push_str(match (framing.paper, setup.is_paper()) {
+        (false, _) => "## Results\n\n",
+        (true, true) => "## Paper versus reproduced\n\n",
+        (true, false) => "## Your scenario\n\n",
     });
-    let rows: Vec<Vec<String>> = s
-        .rows
-        .iter()
-        .map(|r| row_cells(r, &analysis.units))
-        .collect();
-    md.push_str(&md_table(&headers(setup), &rows));
-    md.push_str(if setup.is_paper() {
-        "\n## Claims\n\n"
-    } else {
-        "\n## The paper's claims on your scenario\n\nThe paper's claims are about its own \
-         setup; here they are evaluated on your scenario's numbers.\n\n"
+    let (head, rows) = table(&s.rows, &analysis.units, setup, framing);
+    md.push_str(&md_table(&head, &rows));
+    md.push_str(match (framing.paper, setup.is_paper()) {
+        (false, _) => "\n## Checks\n\n",
+        (true, true) => "\n## Claims\n\n",
+        (true, false) => {
+            "\n## The paper's claims on your scenario\n\nThe paper's claims are about its own \
+             setup; here they are evaluated on your scenario's numbers.\n\n"
+        }
     });
     if s.claims.is_empty() {
         md.push_str("(no claims evaluated)\n");
@@ -171,12 +235,13 @@ pub(crate) fn experiment_report(
             .map(|c| {
                 vec![
                     format!("`{}`: {}", c.id, c.text),
-                    verdict(c, setup).to_string(),
+                    verdict(c, setup, framing).to_string(),
                     c.detail.clone(),
                 ]
             })
             .collect();
-        md.push_str(&md_table(&["claim", "verdict", "detail"], &rows));
+        let first = if framing.paper { "claim" } else { "check" };
+        md.push_str(&md_table(&[first, "verdict", "detail"], &rows));
     }
     let section = analysis.report.trim();
     if !section.is_empty() {
@@ -198,25 +263,27 @@ pub(crate) fn experiment_report(
 /// Every row of `r` as a console table (method, metric, unit, paper, value, 95 % CI),
 /// headed for its setup.
 pub fn console_rows(r: &ExperimentResult) -> String {
-    let rows: Vec<Vec<String>> = r
-        .summary
-        .rows
-        .iter()
-        .map(|row| row_cells(row, &r.units))
-        .collect();
-    text_table(&headers(&r.setup), &rows)
+    let (head, rows) = table(&r.summary.rows, &r.units, &r.setup, Framing::of(r));
+    text_table(&head, &rows)
 }
 
 /// The console section of one experiment: run count, seed, time, the setup, every
 /// row with its unit and interval, and the claims.
 pub fn console_section(r: &ExperimentResult) -> String {
     let s = &r.summary;
-    let mut t = format!(
-        "{} runs, base seed {}, {:.1} s\n",
-        s.runs,
-        s.base_seed,
-        r.elapsed.as_secs_f64()
-    );
+    let mut t = if r.deterministic {
+        format!(
+            "one deterministic replay, {:.1} s\n",
+            r.elapsed.as_secs_f64()
+        )
+    } else {
+        format!(
+            "{} runs, base seed {}, {:.1} s\n",
+            s.runs,
+            s.base_seed,
+            r.elapsed.as_secs_f64()
+        )
+    };
     t.push_str(&console_setup(r));
     if let Some(reason) = &r.skipped {
         t.push_str(&format!("skipped: {reason}\n"));
@@ -229,6 +296,16 @@ pub fn console_section(r: &ExperimentResult) -> String {
 
 /// One line: the paper's setup, or the keys in which the scenario differs from it.
 pub fn console_setup(r: &ExperimentResult) -> String {
+    if !r.paper {
+        return if r.setup.is_paper() {
+            format!("settings: the built-in ones (scenarios/{}.toml)\n", r.name)
+        } else {
+            format!(
+                "settings: yours, differ from the built-in ones in {}\n",
+                r.setup.keys_text(6)
+            )
+        };
+    }
     if r.setup.is_paper() {
         "setup: the paper's (paper | reproduced)\n".into()
     } else {
@@ -244,15 +321,15 @@ pub fn console_setup(r: &ExperimentResult) -> String {
 pub fn console_claims(r: &ExperimentResult) -> String {
     let mut t = String::new();
     if !r.summary.claims.is_empty() {
-        t.push_str(if r.setup.is_paper() {
-            "claims:\n"
-        } else {
-            "the paper's claims on your scenario:\n"
+        t.push_str(match (r.paper, r.setup.is_paper()) {
+            (false, _) => "checks:\n",
+            (true, true) => "claims:\n",
+            (true, false) => "the paper's claims on your scenario:\n",
         });
         for c in &r.summary.claims {
             t.push_str(&format!(
                 "  [{}] {}: {} ({})\n",
-                verdict(c, &r.setup),
+                verdict(c, &r.setup, Framing::of(r)),
                 c.id,
                 c.text,
                 c.detail
@@ -317,9 +394,21 @@ mod tests {
         let row = Row::new("A", "mean", 0.0756).with_ci95(0.07, 0.081);
         let units = BTreeMap::from([("mean".to_string(), "m".to_string())]);
         assert_eq!(
-            row_cells(&row, &units),
+            row_cells(&row, &units, true, true),
             ["A", "mean", "m", "—", "0.07560", "[0.07000, 0.08100]"]
         );
+        // A job on the user's own data: no paper column, the interval only if a row
+        // has one.
+        let own = Framing {
+            paper: false,
+            deterministic: true,
+        };
+        let plain = Row::new("A", "mean", 0.0756);
+        let (head, cells) = table(std::slice::from_ref(&plain), &units, &Setup::Paper, own);
+        assert_eq!(head, ["method", "metric", "unit", "value"]);
+        assert_eq!(cells, [["A", "mean", "m", "0.07560"]]);
+        let (head, _) = table(&[plain, row], &units, &Setup::Paper, own);
+        assert_eq!(head, ["method", "metric", "unit", "value", "95% CI"]);
     }
 
     #[test]

@@ -137,6 +137,8 @@ pub trait DynExperiment: Send + Sync {
     fn methods(&self) -> &'static [&'static str];
     /// [`Experiment::PRESET`].
     fn preset(&self) -> &'static str;
+    /// [`Experiment::PAPER`].
+    fn paper(&self) -> bool;
     /// The JSON schema of the scenario file (field docs as descriptions), from which
     /// `docs/scenarios.md` is generated.
     fn schema(&self) -> schemars::Schema;
@@ -536,6 +538,10 @@ impl<E: Experiment> DynExperiment for E {
 
     fn preset(&self) -> &'static str {
         E::PRESET
+    }
+
+    fn paper(&self) -> bool {
+        E::PAPER
     }
 
     fn schema(&self) -> schemars::Schema {

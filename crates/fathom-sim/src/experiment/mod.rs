@@ -91,6 +91,28 @@ macro_rules! monte_carlo_scenario {
     };
 }
 
+/// Implements [`ScenarioFile`] for the scenario struct of a deterministic job (one
+/// replay of recorded data) with the field `experiment: String` and no `runs` or
+/// `base_seed` key.
+#[macro_export]
+macro_rules! deterministic_scenario {
+    ($ty:ty) => {
+        impl $crate::experiment::ScenarioFile for $ty {
+            fn experiment(&self) -> &str {
+                &self.experiment
+            }
+            fn runs(&self) -> Option<usize> {
+                None
+            }
+            fn set_runs(&mut self, _runs: usize) {}
+            fn base_seed(&self) -> Option<u64> {
+                None
+            }
+            fn set_base_seed(&mut self, _seed: u64) {}
+        }
+    };
+}
+
 /// One Monte Carlo batch of an experiment.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct Batch {
@@ -173,6 +195,12 @@ pub trait Experiment: Clone + Send + Sync + 'static {
     /// The names the scenario's `methods = [...]` key accepts, in report order (shown
     /// by `fathom list`); empty when the experiment has no `methods` key.
     const METHODS: &'static [&'static str] = &[];
+    /// Whether the experiment reproduces a paper (its preset is the paper's setup, its
+    /// rows may carry the paper's numbers and its claims are the paper's). `false` for
+    /// a job on the user's own data (the own-log replays): its preset is only the
+    /// built-in settings, and the report and console say so instead of comparing with
+    /// a paper.
+    const PAPER: bool = true;
 
     /// Validates `scenario` (`file` labels error messages). Fast and free of I/O.
     ///

@@ -1,0 +1,282 @@
+//! `fathom replay plaza|range-beacon|ins-dvl DIR`: a replay on recorded data, run as
+//! a job of the driver like `fathom run` (the settings checked first, their `[data]
+//! dir` replaced by `DIR`, then `fathom_sim::driver::execute_to` with command
+//! `replay`), printed as `fathom run` prints: every row with its unit, then the checks
+//! or claims.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, anyhow};
+use clap::{Args, Subcommand};
+use fathom_experiments::plaza::Plaza;
+use fathom_replay::ins_dvl::InsDvl;
+use fathom_replay::range_beacon::RangeBeacon;
+use fathom_sim::driver::{WriteOptions, console_claims, console_rows, console_setup, execute_to};
+use fathom_sim::experiment::{DynExperiment, Environment, Job};
+
+use crate::{Failure, failure};
+
+#[derive(Debug, Subcommand)]
+pub(crate) enum ReplayData {
+    /// CMU Plaza range-only data: wheel odometry, ranges to radio beacons, ground truth.
+    Plaza(PlazaArgs),
+    /// Your own range-beacon log (fathom's CSV layout, docs/own-data.md).
+    RangeBeacon(OwnArgs),
+    /// Your own INS / DVL log (fathom's CSV layout, docs/own-data.md).
+    InsDvl(OwnArgs),
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct PlazaArgs {
+    /// Folder holding the data set's `*_DR.txt`, `*_TD.txt` and `*_.mat` files.
+    pub(crate) dir: PathBuf,
+    /// Settings file (TOML, the schema of `scenarios/plaza.toml`); default: built in.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) config: Option<PathBuf>,
+    /// Output folder (created if needed).
+    #[arg(long, value_name = "DIR", default_value = "plaza-replay")]
+    pub(crate) out: PathBuf,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
+    /// Not an option of a replay: accepted only to explain that it does not apply.
+    #[arg(long, hide = true, value_name = "S")]
+    pub(crate) seed: Option<String>,
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct OwnArgs {
+    /// The log folder (`log.toml` and the CSV files).
+    pub(crate) dir: PathBuf,
+    /// Settings and methods (TOML, the schema of `scenarios/range-beacon.toml` or
+    /// `scenarios/ins-dvl.toml`); default: built in.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) config: Option<PathBuf>,
+    /// Output folder (default `range-beacon-replay` / `ins-dvl-replay`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
+}
+
+/// What one replay command asks for.
+struct Request<'a> {
+    exp: &'static dyn DynExperiment,
+    dir: &'a Path,
+    config: Option<&'a Path>,
+    out: PathBuf,
+    force: bool,
+}
+
+/// `fathom replay ...`.
+pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
+    let request = match cmd {
+        ReplayData::Plaza(a) => {
+            if a.seed.is_some() {
+                return Err(Failure::Usage(anyhow!(
+                    "--seed does not apply to `replay plaza`: a replay on recorded data is \
+                     deterministic (no random draws, no base seed)"
+                )));
+            }
+            if !a.dir.is_dir() {
+                return Err(Failure::Usage(anyhow!(
+                    "cannot read the Plaza data: `{}` is not a folder",
+                    a.dir.display()
+                )));
+            }
+            Request {
+                exp: &Plaza,
+                dir: &a.dir,
+                config: a.config.as_deref(),
+                out: a.out.clone(),
+                force: a.force,
+            }
+        }
+        ReplayData::RangeBeacon(a) => own(&RangeBeacon, a),
+        ReplayData::InsDvl(a) => own(&InsDvl, a),
+    };
+    replay(&request)
+}
+
+fn own<'a>(exp: &'static dyn DynExperiment, a: &'a OwnArgs) -> Request<'a> {
+    Request {
+        exp,
+        dir: &a.dir,
+        config: a.config.as_deref(),
+        out: a
+            .out
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("{}-replay", exp.name()))),
+        force: a.force,
+    }
+}
+
+/// The text and label of a settings file: `config` if given (unreadable: a usage
+/// error), else the built-in `preset` labelled `preset_label`.
+fn settings_text(
+    config: Option<&Path>,
+    preset: &str,
+    preset_label: &str,
+) -> Result<(String, String), Failure> {
+    match config {
+        None => Ok((preset.to_string(), preset_label.to_string())),
+        Some(path) => {
+            let label = path.display().to_string();
+            let text = std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read settings file `{label}`"))
+                .map_err(Failure::Usage)?;
+            Ok((text, label))
+        }
+    }
+}
+
+/// The settings text and its label: `--config` or the built-in preset, checked here
+/// (before its `[data] dir` is replaced), so that a bad file is a usage error naming
+/// its key and line.
+fn load_settings(
+    exp: &dyn DynExperiment,
+    config: Option<&Path>,
+) -> Result<(String, String), Failure> {
+    let (text, label) = settings_text(
+        config,
+        exp.preset(),
+        &format!("built-in {}", exp.default_scenario()),
+    )?;
+    exp.resolve(&text, &label, None, None).map_err(failure)?;
+    Ok((text, label))
+}
+
+/// `text` with its `[data] dir` replaced by `dir` (made absolute).
+fn with_data_dir(text: &str, dir: &Path) -> Result<String, Failure> {
+    let mut table: toml::Table = toml::from_str(text)
+        .context("settings")
+        .map_err(Failure::Usage)?;
+    let dir = std::path::absolute(dir)
+        .with_context(|| format!("cannot resolve `{}`", dir.display()))
+        .map_err(Failure::Usage)?;
+    let data = table
+        .get_mut("data")
+        .and_then(toml::Value::as_table_mut)
+        .ok_or_else(|| Failure::Usage(anyhow!("settings: missing table `[data]`")))?;
+    data.insert("dir".into(), toml::Value::String(dir.display().to_string()));
+    toml::to_string(&table)
+        .context("settings")
+        .map_err(Failure::Run)
+}
+
+fn replay(r: &Request<'_>) -> Result<String, Failure> {
+    let (text, label) = load_settings(r.exp, r.config)?;
+    let text = with_data_dir(&text, r.dir)?;
+    let job = Job {
+        text: &text,
+        file: &label,
+        runs: None,
+        seed: None,
+        threads: None,
+        progress: None,
+        env: Environment::new(
+            std::env::current_dir()
+                .context("cannot read the current directory")
+                .map_err(Failure::Run)?,
+        ),
+    };
+    let options = WriteOptions {
+        force: r.force,
+        command: "replay".into(),
+        scenario_files: true,
+    };
+    let (result, info) =
+        execute_to(r.exp, &job, &r.out, &options).map_err(|e| match failure(e) {
+            Failure::Usage(e) => Failure::Usage(e.context("replay failed")),
+            Failure::Run(e) => Failure::Run(e.context("replay failed")),
+        })?;
+    let mut out = format!(
+        "{} replay of {} with {label}: done in {:.1} s (fathom {})\n",
+        r.exp.name(),
+        r.dir.display(),
+        result.elapsed.as_secs_f64(),
+        info.fathom_version
+    );
+    out.push_str(&console_setup(&result));
+    out.push_str(&console_rows(&result));
+    out.push_str(&console_claims(&result));
+    out.push_str(&format!(
+        "outputs: {} ({} figures, report.md, summary.json)\n",
+        result.out_dir.display(),
+        result.figures.len()
+    ));
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fathom_sim::Experiment;
+
+    #[test]
+    fn built_in_settings_parse_and_bad_settings_are_usage_errors() {
+        for exp in [&Plaza as &dyn DynExperiment, &RangeBeacon, &InsDvl] {
+            assert!(load_settings(exp, None).is_ok(), "{}", exp.name());
+        }
+        let dir = std::env::temp_dir().join(format!("fathom-cli-test-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let bad = dir.join("bad.toml");
+        std::fs::write(
+            &bad,
+            <Plaza as Experiment>::PRESET.replace("sigma_m = 1.0", "sigma_m = -1.0"),
+        )
+        .unwrap();
+        match load_settings(&Plaza, Some(&bad)) {
+            Err(Failure::Usage(e)) => {
+                let s = format!("{e:#}");
+                assert!(
+                    s.contains("ranges.sigma_m") && s.contains("bad.toml"),
+                    "{s}"
+                );
+            }
+            other => panic!("expected a usage error, got {other:?}"),
+        }
+        assert!(matches!(
+            load_settings(&Plaza, Some(&dir.join("missing.toml"))),
+            Err(Failure::Usage(_))
+        ));
+        let args = PlazaArgs {
+            dir: dir.join("no-such-folder"),
+            config: None,
+            out: dir.join("out"),
+            seed: None,
+            force: false,
+        };
+        let plaza = |a: PlazaArgs| replay_cmd(&ReplayData::Plaza(a));
+        assert!(matches!(plaza(args), Err(Failure::Usage(_))));
+        std::fs::create_dir_all(dir.join("empty")).unwrap();
+        let args = PlazaArgs {
+            dir: dir.join("empty"),
+            config: None,
+            out: dir.join("out"),
+            seed: None,
+            force: false,
+        };
+        // A data folder without the data set is the user's input: exit code 2.
+        match plaza(args) {
+            Err(Failure::Usage(e)) => assert!(format!("{e:#}").contains("_DR.txt"), "{e:#}"),
+            other => panic!("expected a usage error, got {other:?}"),
+        }
+        // A seed does not apply to a deterministic replay: a usage error, not ignored.
+        let args = PlazaArgs {
+            dir: dir.join("empty"),
+            config: None,
+            out: dir.join("out"),
+            seed: Some("3".into()),
+            force: false,
+        };
+        match plaza(args) {
+            Err(Failure::Usage(e)) => assert!(format!("{e:#}").contains("--seed"), "{e:#}"),
+            other => panic!("expected a usage error, got {other:?}"),
+        }
+        assert!(!dir.join("out").exists());
+    }
+}
