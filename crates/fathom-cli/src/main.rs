@@ -91,11 +91,10 @@ use replay::{ReplayData, replay_cmd};
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
-use fathom_experiments::registry;
-use fathom_replay::own_log_replays;
+use fathom_experiments::{jobs, registry};
 use fathom_sim::cost::Limits;
 use fathom_sim::driver::{console_claims, console_rows, console_setup};
-use fathom_sim::experiment::{DynExperiment, Shard};
+use fathom_sim::experiment::Shard;
 use fathom_sim::progress::{Progress, ProgressEvent};
 use fathom_sim::user_run::{
     RunOptions, assess_scenario, check_line, check_scenario_with, job_of, one_line, run_assessed,
@@ -235,15 +234,6 @@ pub(crate) fn failure(e: impl Into<SimError>) -> Failure {
     } else {
         Failure::Run(line)
     }
-}
-
-/// What `fathom run` and `fathom check` accept: the paper experiments and the replays
-/// of one's own log (whose output folders hold a `scenario.toml` that `fathom run`
-/// reproduces).
-fn jobs() -> Vec<&'static dyn DynExperiment> {
-    let mut all = registry();
-    all.extend(own_log_replays());
-    all
 }
 
 fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {

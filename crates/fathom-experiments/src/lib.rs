@@ -36,3 +36,12 @@ pub fn registry() -> Vec<&'static dyn DynExperiment> {
         &urban::Urban,
     ]
 }
+
+/// Every job a scenario file may name, what `fathom run` / `fathom check` and
+/// `fathom.run` / `fathom.check` accept: the registered experiments, then the replays of
+/// one's own log (whose output folders hold a `scenario.toml` that runs again).
+pub fn jobs() -> Vec<&'static dyn DynExperiment> {
+    let mut all = registry();
+    all.extend(fathom_replay::own_log_replays());
+    all
+}

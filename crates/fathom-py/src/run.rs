@@ -11,7 +11,7 @@
 
 use std::path::PathBuf;
 
-use fathom_experiments::registry;
+use fathom_experiments::{jobs, registry};
 use fathom_report::output::Summary;
 use fathom_sim::experiment::{Environment, Executed, Job, OutputFile};
 use fathom_sim::user_run::{
@@ -90,7 +90,7 @@ fn read_scenario(obj: &Bound<'_, PyAny>) -> PyResult<Scenario> {
 
 /// Checks the scenario: `Ok(resolved TOML)` or the `fathom check` line as `ValueError`.
 fn check_text(scenario: &Scenario) -> PyResult<String> {
-    let reg = registry();
+    let reg = jobs();
     if let Some(path) = &scenario.path {
         // the CLI's own function, so the line is the CLI's to the byte
         let (code, line) = check_command(path, &reg);
@@ -286,7 +286,7 @@ pub fn run(
                         progress: None,
                         env: Environment::new(base_dir),
                     };
-                    assess_scenario(&job, &registry())?.1.execute()
+                    assess_scenario(&job, &jobs())?.1.execute()
                 })
                 .map_err(|e| to_py_err(&e))?;
             let files: Vec<&OutputFile> = executed.analysis.files().iter().collect();
@@ -308,7 +308,7 @@ pub fn run(
             };
             let (result, _) = py
                 .detach(|| {
-                    run_scenario_text(&scenario.text, &scenario.label, &options, &registry(), None)
+                    run_scenario_text(&scenario.text, &scenario.label, &options, &jobs(), None)
                 })
                 .map_err(|e| to_py_err(&e))?;
             // Sorted by name: the order `series` and `figures` had when the files were
