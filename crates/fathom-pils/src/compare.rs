@@ -261,10 +261,11 @@ pub fn unit(metric: &str) -> &'static str {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn stats(rmse_3d: f64) -> ErrorStats {
+    /// Error statistics with `rmse_3d` (and its kin) as given (test fixture).
+    pub(crate) fn stats(rmse_3d: f64) -> ErrorStats {
         ErrorStats {
             samples: 10,
             rmse_h: rmse_3d,
@@ -279,7 +280,8 @@ mod tests {
         }
     }
 
-    fn pair(run: u64, l: f64, r: f64) -> RunPair {
+    /// A run pair with lockstep and realtime RMSEs `l`, `r` (test fixture).
+    pub(crate) fn pair(run: u64, l: f64, r: f64) -> RunPair {
         RunPair {
             run,
             lockstep: stats(l),

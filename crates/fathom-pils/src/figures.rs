@@ -143,37 +143,7 @@ pub fn study_figures(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::compare::RunPair;
-    use crate::report::ErrorStats;
-
-    fn stats(rmse_3d: f64) -> ErrorStats {
-        ErrorStats {
-            samples: 10,
-            rmse_h: rmse_3d,
-            rmse_3d,
-            rmse_vel: 0.1,
-            rmse_roll: 0.1,
-            rmse_pitch: 0.1,
-            rmse_yaw: 1.0,
-            mean_3d: rmse_3d,
-            p95_3d: rmse_3d,
-            time_map_aided_s: 0.0,
-        }
-    }
-
-    fn pair(run: u64, l: f64, r: f64) -> RunPair {
-        RunPair {
-            run,
-            lockstep: stats(l),
-            realtime: stats(r),
-            lockstep_equal_offline: true,
-            steps: 100,
-            realtime_solutions: 90,
-            realtime_answers: 90,
-            realtime_late: 9,
-            realtime_latency_ms: [20.0, 40.0],
-        }
-    }
+    use crate::compare::tests::pair;
 
     fn names(files: &[(&'static str, String)]) -> Vec<&'static str> {
         files.iter().map(|f| f.0).collect()

@@ -9,7 +9,8 @@
 //!   every top-level module of a crate;
 //! - no test returns early or prints "skipped" when data is missing (a test that needs
 //!   data the repository does not hold is `#[ignore]`d with the reason);
-//! - nothing in the repository reads the sibling `../shared` folder.
+//! - nothing in the repository reads the sibling folder of the team's specs
+//!   ([`SIBLING_FOLDER`]): users do not have it.
 //!
 //! Each check is a function of its inputs, run on the workspace and on a broken input
 //! (negative controls).
@@ -23,6 +24,24 @@ use super::{non_test_part, root, rust_files};
 const MAX_FILE_LINES: usize = 900;
 /// The largest share of the workspace's Rust lines one crate may hold.
 const MAX_CRATE_SHARE: f64 = 0.25;
+
+/// The folder beside the checkout that holds the team's specs and seeds (CI has it,
+/// users do not).
+const SIBLING_FOLDER: &str = "shared";
+
+/// How a path into [`SIBLING_FOLDER`] looks in a file (built here so that this file
+/// does not name the folder itself).
+fn sibling_needles() -> [String; 2] {
+    [
+        format!("../{SIBLING_FOLDER}"),
+        format!("{SIBLING_FOLDER}/data"),
+    ]
+}
+
+/// Whether `text` names a path into [`SIBLING_FOLDER`].
+fn names_sibling(text: &str) -> bool {
+    sibling_needles().iter().any(|n| text.contains(n.as_str()))
+}
 
 /// Folders holding Rust code, relative to the root.
 const CODE_DIRS: [&str; 6] = ["crates", "xtask", "src", "tests", "examples", "fuzz"];
@@ -557,7 +576,7 @@ fn the_codemap_names_what_exists_and_everything_that_does() {
 }
 
 #[test]
-fn no_test_gives_up_quietly_and_nothing_reads_the_shared_folder() {
+fn no_test_gives_up_quietly_and_nothing_reads_the_sibling_folder() {
     let mut problems = Vec::new();
     for f in all_rust_files() {
         let r = rel(&f);
@@ -566,9 +585,9 @@ fn no_test_gives_up_quietly_and_nothing_reads_the_shared_folder() {
         }
         let text = std::fs::read_to_string(&f).unwrap();
         problems.extend(silent_skips(&r, &text));
-        if text.contains("../shared") || text.contains("shared/data") {
+        if names_sibling(&text) {
             problems.push(format!(
-                "{r}: names the `../shared` folder (data lives in the repository)"
+                "{r}: names the sibling `{SIBLING_FOLDER}` folder (data lives in the repository)"
             ));
         }
     }
@@ -582,4 +601,8 @@ fn no_test_gives_up_quietly_and_nothing_reads_the_shared_folder() {
     assert_eq!(silent_skips("crates/a/src/x.rs", printed).len(), 1);
     let loud = "#[test]\nfn t() {\n    assert!(dir().exists(), \"missing\");\n}\n";
     assert!(silent_skips("tests/e2e/x.rs", loud).is_empty());
+    // A path into the sibling folder is found; the repository's own data is not.
+    let outside = format!("let d = Path::new(\"../{SIBLING_FOLDER}/plaza1\");");
+    assert!(names_sibling(&outside));
+    assert!(!names_sibling("let d = repo_root().join(\"data/plaza1\");"));
 }

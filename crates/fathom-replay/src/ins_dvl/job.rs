@@ -2,24 +2,17 @@
 //! `fathom replay ins-dvl DIR` and `fathom run` on its settings file go through the
 //! driver like every experiment (module docs of [`crate::own_log`]).
 
-use std::path::PathBuf;
-
 use rand_chacha::ChaCha8Rng;
 
 use super::{InsDvlReplay, InsDvlSettings, InsDvlToml, analysis, check, figures, replay, report};
-use crate::own_log::{self, INS_DVL_PRESET, SEED_DOC, log_dir, log_error};
+use crate::own_log::{self, INS_DVL_PRESET, SEED_DOC};
 use fathom_data::layout::ins_dvl::InsDvlLog;
 use fathom_sim::SimError;
 use fathom_sim::cost::CostTerm;
 use fathom_sim::experiment::{Analysis, Batch, Environment, Experiment};
 
 /// The settings, the log folder and the log, read and checked.
-#[derive(Debug)]
-pub struct Prepared {
-    settings: InsDvlSettings,
-    dir: PathBuf,
-    log: InsDvlLog,
-}
+pub type Prepared = own_log::PreparedLog<InsDvlSettings, InsDvlLog>;
 
 /// The `ins-dvl` replay of one's own log.
 #[derive(Debug, Clone, Copy, Default)]
@@ -49,10 +42,8 @@ impl Experiment for InsDvl {
     }
 
     fn prepare(&self, settings: InsDvlSettings, env: &Environment) -> Result<Prepared, SimError> {
-        let dir = log_dir(env, &settings.data_dir);
-        let log = InsDvlLog::read_dir(&dir).map_err(log_error)?;
-        check(&log, &settings)?;
-        Ok(Prepared { settings, dir, log })
+        let data_dir = settings.data_dir.clone();
+        own_log::prepare_log(settings, &data_dir, env, |d| InsDvlLog::read_dir(d), check)
     }
 
     fn batches(&self, _prepared: &Prepared) -> Vec<Batch> {

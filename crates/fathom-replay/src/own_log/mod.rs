@@ -37,6 +37,36 @@ pub fn log_dir(env: &Environment, dir: &str) -> PathBuf {
     find_data_dir(&env.base_dir, dir).unwrap_or_else(|| env.base_dir.join(dir))
 }
 
+/// What an own-log job prepares: its settings, the log folder and the log, read and
+/// checked against the settings.
+#[derive(Debug)]
+pub struct PreparedLog<S, L> {
+    /// The checked settings.
+    pub(crate) settings: S,
+    /// The log folder as found.
+    pub(crate) dir: PathBuf,
+    /// The log.
+    pub(crate) log: L,
+}
+
+/// Reads the log of `settings` (its `[data] dir`, found with [`log_dir`]) with `read`
+/// and checks it against the settings with `check`: what both own-log jobs prepare.
+///
+/// # Errors
+/// A log that cannot be read ([`log_error`]); `check`'s errors.
+pub fn prepare_log<S, L>(
+    settings: S,
+    data_dir: &str,
+    env: &Environment,
+    read: impl FnOnce(&std::path::Path) -> Result<L, LogError>,
+    check: impl FnOnce(&L, &S) -> Result<(), SimError>,
+) -> Result<PreparedLog<S, L>, SimError> {
+    let dir = log_dir(env, data_dir);
+    let log = read(&dir).map_err(log_error)?;
+    check(&log, &settings)?;
+    Ok(PreparedLog { settings, dir, log })
+}
+
 /// A log that cannot be read (the user's data: missing folder, a log of the other
 /// kind, a bad file naming its line and column).
 pub fn log_error(e: LogError) -> SimError {

@@ -3,27 +3,20 @@
 //! file go through the driver like every experiment (module docs of
 //! [`crate::own_log`]).
 
-use std::path::PathBuf;
-
 use rand_chacha::ChaCha8Rng;
 
 use super::{
     RangeBeaconReplay, RangeBeaconSettings, RangeBeaconToml, analysis, check, figures, replay,
     report,
 };
-use crate::own_log::{self, RANGE_BEACON_PRESET, SEED_DOC, log_dir, log_error};
+use crate::own_log::{self, RANGE_BEACON_PRESET, SEED_DOC};
 use fathom_data::layout::range_beacon::RangeBeaconLog;
 use fathom_sim::SimError;
 use fathom_sim::cost::CostTerm;
 use fathom_sim::experiment::{Analysis, Batch, Environment, Experiment};
 
 /// The settings, the log folder and the log, read and checked.
-#[derive(Debug)]
-pub struct Prepared {
-    settings: RangeBeaconSettings,
-    dir: PathBuf,
-    log: RangeBeaconLog,
-}
+pub type Prepared = own_log::PreparedLog<RangeBeaconSettings, RangeBeaconLog>;
 
 /// The `range-beacon` replay of one's own log.
 #[derive(Debug, Clone, Copy, Default)]
@@ -61,10 +54,14 @@ impl Experiment for RangeBeacon {
         settings: RangeBeaconSettings,
         env: &Environment,
     ) -> Result<Prepared, SimError> {
-        let dir = log_dir(env, &settings.data_dir);
-        let log = RangeBeaconLog::read_dir(&dir).map_err(log_error)?;
-        check(&log, &settings)?;
-        Ok(Prepared { settings, dir, log })
+        let data_dir = settings.data_dir.clone();
+        own_log::prepare_log(
+            settings,
+            &data_dir,
+            env,
+            |d| RangeBeaconLog::read_dir(d),
+            check,
+        )
     }
 
     fn batches(&self, _prepared: &Prepared) -> Vec<Batch> {
