@@ -130,7 +130,7 @@ fn study(
             realtime_latency_ms: rt.latency.map_or([f64::NAN; 2], |q| [q.p50_ms, q.p95_ms]),
         });
     }
-    let c = Comparison::new(pairs).map_err(run_err)?;
+    let c = Comparison::new(pairs, s.file.seed).map_err(run_err)?;
     write_named(dir, &c.files(s).map_err(run_err)?)?;
     let figures =
         fathom_pils::figures::study_figures(&c, &example, &latencies_ms).map_err(run_err)?;

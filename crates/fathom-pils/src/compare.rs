@@ -1,15 +1,17 @@
 //! The realtime degradation study: the same runs (seed, run index) flown in lockstep
 //! and in real time, the per-run errors side by side and, per metric, the mean of
-//! each pacing and the paired difference realtime - lockstep with 95 % Student-t
-//! intervals over the runs (`fathom_stats::paired_mean_ci`: the two pacings of a run
-//! share its flight, sensors and initial error, so the pairs remove that spread).
+//! each pacing with its BCa bootstrap interval, median and divergence count (the
+//! errors are non-negative and heavy-tailed when a run diverges), and the paired
+//! difference realtime - lockstep with its Student-t interval over the runs (the two
+//! pacings of a run share its flight, sensors and initial error, so the pairs remove
+//! that spread). See `fathom_stats::metric_summary`.
 
-use fathom_report::output::{Row, Summary, csv_string};
-use fathom_stats::{MeanCi, mean_ci, paired_mean_ci};
+use fathom_report::output::{Row, RowDivergence, Summary, csv_string};
+use fathom_stats::{MetricKind, MetricSummary, SummarySettings, summarize_metric};
 use serde::Serialize;
 
 use crate::PilsError;
-use crate::report::{ErrorStats, SEED_DOC};
+use crate::report::{ErrorStats, SEED_DOC, unit};
 use crate::settings::Settings;
 
 /// One run flown both ways.
@@ -41,12 +43,12 @@ pub struct RunPair {
 pub struct MetricCi {
     /// Metric name (`ErrorStats::metrics`).
     pub metric: &'static str,
-    /// Lockstep mean and 95 % CI.
-    pub lockstep: MeanCi,
-    /// Realtime mean and 95 % CI.
-    pub realtime: MeanCi,
-    /// Paired difference realtime - lockstep, mean and 95 % CI.
-    pub difference: MeanCi,
+    /// Lockstep: mean with its bootstrap 95 % CI, median, divergence count.
+    pub lockstep: MetricSummary,
+    /// Realtime: as `lockstep`.
+    pub realtime: MetricSummary,
+    /// Paired difference realtime - lockstep: mean with its Student-t 95 % CI.
+    pub difference: MetricSummary,
 }
 
 /// The study's result.
@@ -63,12 +65,13 @@ pub struct Comparison {
 }
 
 impl Comparison {
-    /// Aggregates the runs (at least 2, for an interval).
+    /// Aggregates the runs (at least 2, for an interval); the bootstrap draws from
+    /// streams seeded by `seed` (the study's seed) and each row's key.
     ///
     /// # Errors
     /// [`PilsError::Setting`] for fewer than 2 runs; [`PilsError::Model`] when a
     /// statistic is not finite (a run without solutions).
-    pub fn new(runs: Vec<RunPair>) -> Result<Self, PilsError> {
+    pub fn new(runs: Vec<RunPair>, seed: u64) -> Result<Self, PilsError> {
         if runs.len() < 2 {
             return Err(PilsError::setting(
                 "runs",
@@ -76,17 +79,23 @@ impl Comparison {
                 "must be >= 2 (a confidence interval needs a spread)",
             ));
         }
+        let settings = SummarySettings::new(STUDY_RESAMPLES, STUDY_DIVERGENCE_FACTOR, seed)
+            .map_err(|e| PilsError::model("statistics", e))?;
         let names = runs[0].lockstep.metrics().map(|(n, _)| n);
         let mut metrics = Vec::with_capacity(names.len());
         for (i, name) in names.into_iter().enumerate() {
             let l: Vec<f64> = runs.iter().map(|r| r.lockstep.metrics()[i].1).collect();
             let rt: Vec<f64> = runs.iter().map(|r| r.realtime.metrics()[i].1).collect();
+            let d: Vec<f64> = rt.iter().zip(&l).map(|(a, b)| a - b).collect();
             let err = |e: fathom_stats::StatsError| PilsError::model(name, e);
+            let summary = |label: &str, kind: MetricKind, v: &[f64]| {
+                summarize_metric(v, kind, &settings, label, name).map_err(err)
+            };
             metrics.push(MetricCi {
                 metric: name,
-                lockstep: mean_ci(&l).map_err(err)?,
-                realtime: mean_ci(&rt).map_err(err)?,
-                difference: paired_mean_ci(&rt, &l).map_err(err)?,
+                lockstep: summary("lockstep", MetricKind::NonNegative, &l)?,
+                realtime: summary("realtime", MetricKind::NonNegative, &rt)?,
+                difference: summary("realtime-lockstep", MetricKind::Signed, &d)?,
             });
         }
         let sols: usize = runs.iter().map(|r| r.realtime_solutions).sum();
@@ -157,15 +166,35 @@ impl Comparison {
                 ("realtime", &mc.realtime),
                 ("realtime-lockstep", &mc.difference),
             ] {
-                let [lo, hi] = v.bounds();
-                summary.push_row(
-                    Row::new(format!("{label}/{method}"), mc.metric, v.mean).with_ci95(lo, hi),
-                );
+                summary.push_row(row(&format!("{label}/{method}"), mc.metric, v));
             }
         }
         summary
     }
+}
 
+/// Bootstrap resamples of the study's intervals.
+pub const STUDY_RESAMPLES: usize = 2000;
+/// A run diverged when its error exceeds this factor times the median.
+pub const STUDY_DIVERGENCE_FACTOR: f64 = 10.0;
+
+/// The `summary.json` row of a summary over runs.
+fn row(method: &str, metric: &str, s: &MetricSummary) -> Row {
+    let mut row = Row::new(method, metric, s.mean).with_unit(unit(metric));
+    if let Some([lo, hi]) = s.ci95 {
+        row = row.with_ci95(lo, hi, s.ci_method.name());
+    }
+    row.median = Some(s.median);
+    row.median_ci95 = s.median_ci95;
+    row.divergence = s.divergence.map(|d| RowDivergence {
+        threshold: d.threshold,
+        runs: d.runs,
+        fraction: d.fraction,
+    });
+    row
+}
+
+impl Comparison {
     /// The study's text files (name, content): `runs.csv` ([`Comparison::runs_csv`]),
     /// `report.md` ([`Comparison::markdown`] under [`title`]), `comparison.json`
     /// (everything) and `summary.json` ([`Comparison::summary`]). The figures are
@@ -209,14 +238,21 @@ impl Comparison {
             );
         }
         s += &format!(
-            "\n## Over {} runs (mean [95 % CI], Student t)\n\n\
+            "\n## Over {} runs (mean [95 % CI]: BCa bootstrap per pacing, Student t for the \
+             paired difference; median; runs beyond 10x the median)\n\n\
              | metric | lockstep | realtime | realtime - lockstep (paired) |\n\
              | --- | --- | --- | --- |\n",
             self.runs.len()
         );
-        let fmt = |m: &MeanCi| {
-            let [lo, hi] = m.bounds();
-            format!("{:.3} [{lo:.3}, {hi:.3}]", m.mean)
+        let fmt = |m: &MetricSummary| {
+            let [lo, hi] = m.ci95.unwrap_or([m.mean; 2]);
+            let diverged = m.divergence.map_or(String::new(), |d| {
+                format!("; {} of {} diverged", d.runs, m.n)
+            });
+            format!(
+                "{:.3} [{lo:.3}, {hi:.3}] (median {:.3}{diverged})",
+                m.mean, m.median
+            )
         };
         for m in &self.metrics {
             s += &format!(
@@ -248,16 +284,6 @@ pub fn title(s: &Settings) -> String {
         1e3 * f.latency_s,
         1e3 * f.jitter_s
     )
-}
-
-/// The unit of a metric of [`ErrorStats::metrics`].
-pub fn unit(metric: &str) -> &'static str {
-    match metric {
-        "rmse_vel" => "m/s",
-        "rmse_roll" | "rmse_pitch" | "rmse_yaw" => "deg",
-        "time_map_aided_s" => "s",
-        _ => "m",
-    }
 }
 
 #[cfg(test)]
@@ -300,11 +326,10 @@ pub(crate) mod tests {
     /// t(0.975, 2) * 0.1 / sqrt(3) = 4.302653 * 0.057735 = 0.248414.
     #[test]
     fn paired_difference_interval() {
-        let c = Comparison::new(vec![
-            pair(0, 1.0, 1.1),
-            pair(1, 2.0, 2.2),
-            pair(2, 3.0, 3.3),
-        ])
+        let c = Comparison::new(
+            vec![pair(0, 1.0, 1.1), pair(1, 2.0, 2.2), pair(2, 3.0, 3.3)],
+            5,
+        )
         .unwrap();
         let m = c.metrics.iter().find(|m| m.metric == "rmse_3d").unwrap();
         assert!((m.difference.mean - 0.2).abs() < 1e-12);
@@ -313,7 +338,7 @@ pub(crate) mod tests {
         assert!((0.2 - lo - 0.248_414).abs() < 1e-5, "{lo}");
         // Unpaired, the spread of the runs (1, 2, 3) swamps the difference.
         let [llo, lhi] = m.lockstep.ci95.unwrap();
-        assert!(lhi - llo > 10.0 * (hi - lo));
+        assert!(lhi - llo > 2.0 * (hi - lo), "{llo} {lhi}");
         assert!((c.late_fraction - 0.1).abs() < 1e-12);
         assert!((c.solution_fraction - 0.9).abs() < 1e-12);
         let md = c.markdown("t");
@@ -326,13 +351,21 @@ pub(crate) mod tests {
         assert_eq!((s.runs, s.base_seed), (3, 5));
         let d = s.row("realtime-lockstep/MGPMF", "rmse_3d").unwrap();
         assert!((d.value - 0.2).abs() < 1e-12 && d.ci95.is_some());
+        assert_eq!(d.ci_method.as_deref(), Some("student-t"));
+        let l = s.row("lockstep/MGPMF", "rmse_3d").unwrap();
+        assert_eq!(
+            (l.ci_method.as_deref(), l.unit.as_str()),
+            (Some("bootstrap-bca"), "m")
+        );
+        assert!(l.ci95.unwrap()[0] >= 0.0);
+        s.check().unwrap();
     }
 
     #[test]
     fn one_run_or_no_solutions_is_refused() {
-        assert!(Comparison::new(vec![pair(0, 1.0, 1.1)]).is_err());
+        assert!(Comparison::new(vec![pair(0, 1.0, 1.1)], 0).is_err());
         let mut p = pair(1, 1.0, f64::NAN);
         p.realtime.rmse_3d = f64::NAN;
-        assert!(Comparison::new(vec![pair(0, 1.0, 1.1), p]).is_err());
+        assert!(Comparison::new(vec![pair(0, 1.0, 1.1), p], 0).is_err());
     }
 }

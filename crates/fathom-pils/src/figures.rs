@@ -10,7 +10,8 @@ use std::path::Path;
 use fathom_report::plot::{Figure, Histogram, LinePlot, Series};
 
 use crate::PilsError;
-use crate::compare::{Comparison, unit};
+use crate::compare::Comparison;
+use crate::report::unit;
 use crate::session::SimSeries;
 
 /// Latency histogram bins.
@@ -169,7 +170,7 @@ mod tests {
         assert!(files[1].1.contains("3 solutions"), "{}", files[1].1);
         assert!(session_figures(&SimSeries::default()).unwrap().is_empty());
 
-        let c = Comparison::new(vec![pair(4, 1.0, 1.1), pair(5, 2.0, 2.2)]).unwrap();
+        let c = Comparison::new(vec![pair(4, 1.0, 1.1), pair(5, 2.0, 2.2)], 0).unwrap();
         let example = [("lockstep", vec![(0.0, 1.0), (1.0, 2.0)])];
         let files = study_figures(&c, &example, &[20.0, 25.0, 40.0]).unwrap();
         assert_eq!(

@@ -58,6 +58,16 @@ impl ErrorStats {
     }
 }
 
+/// The unit of a metric of [`ErrorStats::metrics`].
+pub fn unit(metric: &str) -> &'static str {
+    match metric {
+        "rmse_vel" => "m/s",
+        "rmse_roll" | "rmse_pitch" | "rmse_yaw" => "deg",
+        "time_map_aided_s" => "s",
+        _ => "m",
+    }
+}
+
 /// The statistics of solutions (by step) against the truth.
 pub fn evaluate(src: &dyn SensorSource, sols: &BTreeMap<u64, Solution>) -> ErrorStats {
     let mut s = [0.0f64; 6];
@@ -209,7 +219,7 @@ pub fn sim_summary(r: &SimReport, seed: u64, run: u64) -> Summary {
         for (m, v) in st.iter().flat_map(ErrorStats::metrics) {
             let method = format!("{label}/{}", r.method);
             if v.is_finite() {
-                s.push_row(Row::new(method, m, v));
+                s.push_row(Row::new(method, m, v).with_unit(unit(m)));
             } else {
                 non_finite.push(format!("{method} {m}"));
             }

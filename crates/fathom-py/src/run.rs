@@ -155,7 +155,8 @@ pub struct RunResult {
     base_seed: u64,
     /// The whole `summary.json` content (a dict equal to `json.load` of the file).
     summary: Py<PyAny>,
-    /// `summary["rows"]`: dicts with `method`, `metric`, `paper`, `value`, `ci95`.
+    /// `summary["rows"]`: dicts with `method`, `metric`, `unit`, `paper`, `value`,
+    /// `ci95` and, over runs, `ci_method`, `median`, `median_ci95`, `divergence`.
     rows: Py<PyAny>,
     /// `summary["claims"]`: dicts with `id`, `text`, `holds`, `detail`.
     claims: Py<PyAny>,

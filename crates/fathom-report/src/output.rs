@@ -26,12 +26,21 @@ use crate::ReportError;
 pub use crate::csv_writer::{CsvWriter, csv_float, csv_string};
 
 /// One compared quantity: a method's metric, the paper's number and the reproduced one.
+///
+/// Fields in `summary.json` order: `method`, `metric`, `unit`, `paper`, `value`,
+/// `ci95`, then, for a value over Monte Carlo runs, `ci_method` (how `ci95` was
+/// computed), `median` and `median_ci95` (order-statistic interval), and `divergence`
+/// (the runs beyond a threshold). See docs/reading-the-numbers.md.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Row {
     /// Method or case name (e.g. `MF`, `SC/high`, `corr_low`).
     pub method: String,
     /// Metric name (e.g. `mean_3d`, `cov_12`).
     pub metric: String,
+    /// Unit of `value` (`m`, `m/s`, `deg`, `s`, `1` for a ratio or a count per run);
+    /// set by the driver from the experiment's declaration, never empty when written.
+    #[serde(default)]
+    pub unit: String,
     /// The number printed in the paper, `None` (JSON `null`) where the paper gives none.
     pub paper: Option<f64>,
     /// The value measured by this project (never copied from the paper).
@@ -39,17 +48,47 @@ pub struct Row {
     /// 95 % confidence interval over Monte Carlo runs; `None` only for single
     /// deterministic quantities.
     pub ci95: Option<[f64; 2]>,
+    /// How `ci95` was computed (`bootstrap-bca`, `student-t`, `clopper-pearson`, ...);
+    /// present whenever `ci95` is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ci_method: Option<String>,
+    /// Median over runs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub median: Option<f64>,
+    /// Order-statistic interval of the median (at least 95 %).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub median_ci95: Option<[f64; 2]>,
+    /// The runs beyond the divergence threshold of this metric.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub divergence: Option<RowDivergence>,
+}
+
+/// The runs of a row beyond its divergence threshold ("2 of 50 runs diverged").
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct RowDivergence {
+    /// The threshold, in the row's unit (a factor times the median).
+    pub threshold: f64,
+    /// Runs whose value exceeds it.
+    pub runs: usize,
+    /// `runs` over the number of runs.
+    pub fraction: f64,
 }
 
 impl Row {
-    /// A row with no paper number and no confidence interval.
+    /// A row with no paper number and no confidence interval (its unit is set by the
+    /// driver from the experiment's declaration).
     pub fn new(method: impl Into<String>, metric: impl Into<String>, value: f64) -> Self {
         Row {
             method: method.into(),
             metric: metric.into(),
+            unit: String::new(),
             paper: None,
             value,
             ci95: None,
+            ci_method: None,
+            median: None,
+            median_ci95: None,
+            divergence: None,
         }
     }
 
@@ -59,13 +98,22 @@ impl Row {
         self
     }
 
-    /// Set the 95 % confidence interval `[lo, hi]`.
-    pub fn with_ci95(mut self, lo: f64, hi: f64) -> Self {
+    /// Set the 95 % confidence interval `[lo, hi]` and the name of the method that
+    /// computed it.
+    pub fn with_ci95(mut self, lo: f64, hi: f64, method: &str) -> Self {
         self.ci95 = Some([lo, hi]);
+        self.ci_method = Some(method.to_owned());
         self
     }
 
-    /// Check that every number is finite and `lo <= hi`.
+    /// Set the unit.
+    pub fn with_unit(mut self, unit: impl Into<String>) -> Self {
+        self.unit = unit.into();
+        self
+    }
+
+    /// Check that every number is finite, intervals are ordered, an interval names its
+    /// method, and the unit is set.
     ///
     /// # Errors
     /// [`ReportError::NonFinite`] or [`ReportError::InvalidArgument`] naming the row.
@@ -75,13 +123,39 @@ impl Row {
         if let Some(p) = self.paper {
             finite(&name, "paper", p)?;
         }
-        if let Some([lo, hi]) = self.ci95 {
-            finite(&name, "ci95[0]", lo)?;
-            finite(&name, "ci95[1]", hi)?;
-            if lo > hi {
+        if self.unit.is_empty() {
+            return Err(ReportError::invalid_argument(
+                name,
+                "no unit (the experiment declares the unit of every metric)",
+            ));
+        }
+        for (field, interval) in [("ci95", self.ci95), ("median_ci95", self.median_ci95)] {
+            if let Some([lo, hi]) = interval {
+                finite(&name, &format!("{field}[0]"), lo)?;
+                finite(&name, &format!("{field}[1]"), hi)?;
+                if lo > hi {
+                    return Err(ReportError::invalid_argument(
+                        name,
+                        format!("{field} lower bound {lo} exceeds upper bound {hi}"),
+                    ));
+                }
+            }
+        }
+        if self.ci95.is_some() && self.ci_method.as_deref().is_none_or(str::is_empty) {
+            return Err(ReportError::invalid_argument(
+                name,
+                "ci95 without ci_method (every interval names its method)",
+            ));
+        }
+        if let Some(m) = self.median {
+            finite(&name, "median", m)?;
+        }
+        if let Some(d) = self.divergence {
+            finite(&name, "divergence.threshold", d.threshold)?;
+            if !(0.0..=1.0).contains(&d.fraction) {
                 return Err(ReportError::invalid_argument(
                     name,
-                    format!("ci95 lower bound {lo} exceeds upper bound {hi}"),
+                    format!("divergence fraction {} outside [0, 1]", d.fraction),
                 ));
             }
         }
@@ -101,7 +175,12 @@ fn finite(name: &str, field: &str, v: f64) -> Result<(), ReportError> {
 }
 
 /// A claim of the paper, evaluated on the reproduced numbers.
-#[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
+///
+/// A claim that compares a reproduced interval with a paper's number carries the
+/// equivalence `verdict` (`agrees`, `differs` or `inconclusive`) and the tolerance
+/// `band`; its `holds` is true only for `agrees` ([`Summary::check`] refuses
+/// anything else).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Claim {
     /// Stable identifier (e.g. `eff_best_3d_mean`).
     pub id: String,
@@ -111,7 +190,16 @@ pub struct Claim {
     pub holds: bool,
     /// The numbers behind the verdict (e.g. "EFF 1.12 < T2T 1.80 < MF 2.31").
     pub detail: String,
+    /// The equivalence verdict against a paper's value.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub verdict: Option<String>,
+    /// The tolerance band `[paper - tol, paper + tol]` of the verdict.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub band: Option<[f64; 2]>,
 }
+
+/// The verdicts a claim may carry.
+pub const VERDICTS: [&str; 3] = ["agrees", "differs", "inconclusive"];
 
 impl Claim {
     /// Build a claim.
@@ -126,7 +214,57 @@ impl Claim {
             text: text.into(),
             holds,
             detail: detail.into(),
+            verdict: None,
+            band: None,
         }
+    }
+
+    /// Build a claim judged by equivalence: `verdict` is one of [`VERDICTS`], `band`
+    /// the tolerance band; `holds` is `verdict == "agrees"`.
+    pub fn equivalence(
+        id: impl Into<String>,
+        text: impl Into<String>,
+        verdict: &str,
+        band: [f64; 2],
+        detail: impl Into<String>,
+    ) -> Self {
+        Claim {
+            verdict: Some(verdict.to_owned()),
+            band: Some(band),
+            ..Claim::new(id, text, verdict == "agrees", detail)
+        }
+    }
+
+    /// Check the verdict: a known word, a finite ordered band, and `holds` only for
+    /// `agrees`.
+    ///
+    /// # Errors
+    /// [`ReportError::InvalidArgument`] naming the claim.
+    pub fn check(&self) -> Result<(), ReportError> {
+        let name = format!("claim `{}`", self.id);
+        if let Some(v) = &self.verdict {
+            if !VERDICTS.contains(&v.as_str()) {
+                return Err(ReportError::invalid_argument(
+                    name,
+                    format!("verdict `{v}` is none of agrees, differs, inconclusive"),
+                ));
+            }
+            if self.holds != (v == "agrees") {
+                return Err(ReportError::invalid_argument(
+                    name,
+                    format!("holds = {} with verdict `{v}`", self.holds),
+                ));
+            }
+            let Some([lo, hi]) = self.band else {
+                return Err(ReportError::invalid_argument(
+                    name,
+                    "a verdict without its band",
+                ));
+            };
+            finite(&name, "band[0]", lo)?;
+            finite(&name, "band[1]", hi)?;
+        }
+        Ok(())
     }
 }
 
@@ -197,6 +335,7 @@ impl Summary {
             r.check()?;
         }
         for (i, c) in self.claims.iter().enumerate() {
+            c.check()?;
             if self.claims[..i].iter().any(|d| d.id == c.id) {
                 return Err(ReportError::invalid_argument(
                     format!("summary `{}` claims", self.experiment),
@@ -665,10 +804,11 @@ mod tests {
         let mut s = Summary::new("fusion", "000_777a2c84247a6c44.txt", 200, 1);
         s.push_row(
             Row::new("MF", "mean_3d", 2.31)
+                .with_unit("m")
                 .with_paper(3.67)
-                .with_ci95(2.25, 2.37),
+                .with_ci95(2.25, 2.37, "bootstrap-bca"),
         );
-        s.push_row(Row::new("EFF", "turn_ratio_3d", 1.0));
+        s.push_row(Row::new("EFF", "turn_ratio_3d", 1.0).with_unit("1"));
         s.push_claim(Claim::new(
             "eff_best_3d_mean",
             "EFF lowest",
@@ -731,6 +871,53 @@ mod tests {
         let mut s = demo();
         s.push_claim(Claim::new("eff_best_3d_mean", "dup", false, ""));
         assert!(s.check().is_err());
+    }
+
+    /// A row without its unit, an interval without its method, a verdict whose
+    /// `holds` disagrees with it or without its band: all refused by name.
+    #[test]
+    fn units_methods_and_verdicts_are_checked() {
+        let mut s = demo();
+        s.rows[1].unit.clear();
+        let e = s.check().unwrap_err().to_string();
+        assert!(
+            e.contains("`EFF` / `turn_ratio_3d`") && e.contains("no unit"),
+            "{e}"
+        );
+        let mut s = demo();
+        s.rows[0].ci_method = None;
+        assert!(s.check().unwrap_err().to_string().contains("ci_method"));
+        let mut s = demo();
+        s.push_claim(Claim::equivalence(
+            "eq",
+            "t",
+            "inconclusive",
+            [1.0, 2.0],
+            "d",
+        ));
+        s.check().unwrap();
+        assert!(!s.claims[1].holds);
+        s.claims[1].holds = true;
+        assert!(s.check().is_err());
+        s.claims[1].holds = false;
+        s.claims[1].verdict = Some("maybe".into());
+        assert!(s.check().is_err());
+        s.claims[1].verdict = Some("differs".into());
+        s.claims[1].band = None;
+        assert!(s.check().is_err());
+        let text = demo().to_json_pretty().unwrap();
+        let row = &text[text.find("\"rows\"").unwrap()..];
+        let order = [
+            "\"method\"",
+            "\"metric\"",
+            "\"unit\"",
+            "\"paper\"",
+            "\"value\"",
+            "\"ci95\"",
+            "\"ci_method\"",
+        ];
+        let pos: Vec<usize> = order.iter().map(|k| row.find(k).unwrap()).collect();
+        assert!(pos.windows(2).all(|w| w[0] < w[1]), "{text}");
     }
 
     #[test]

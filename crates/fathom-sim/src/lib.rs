@@ -24,7 +24,12 @@
 //! let half = 1.96 * sd / n.sqrt();
 //!
 //! let mut summary = Summary::new("demo", "none.txt", 100, 1);
-//! summary.push_row(Row::new("uniform", "mean", mean).with_paper(0.5).with_ci95(mean - half, mean + half));
+//! summary.push_row(
+//!     Row::new("uniform", "mean", mean)
+//!         .with_unit("1")
+//!         .with_paper(0.5)
+//!         .with_ci95(mean - half, mean + half, "normal"),
+//! );
 //! summary.push_claim(Claim::new(
 //!     "ci_covers_half",
 //!     "the 95 % CI covers 0.5",
@@ -56,6 +61,7 @@ pub mod method_list;
 pub mod montecarlo;
 pub mod progress;
 pub mod scenario;
+pub mod statistics;
 pub mod user_run;
 
 pub use driver::{PaperOptions, PaperResult, error_chain, run_paper};

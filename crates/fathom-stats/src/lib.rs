@@ -49,34 +49,46 @@
 //! ```
 
 pub mod allan;
+pub mod bootstrap;
 pub mod consistency;
 pub mod covariance;
+pub mod equivalence;
 pub mod error;
 pub mod error_series;
 pub mod histogram;
+pub mod metric_summary;
 pub mod monte_carlo;
 pub mod proportion;
 pub mod quantile;
 pub mod run_stats;
 pub mod sample;
 
+#[cfg(test)]
+mod coverage_tests;
+
 pub use allan::{AllanPoint, RateNoise, overlapping_allan_variance, white_noise_coefficient};
+pub use bootstrap::{bootstrap_bca_mean, bootstrap_percentile_mean};
 pub use consistency::{ChiSquareBounds, nees, nis};
 pub use covariance::{
     CiMethod, CovarianceCi, MaxDeviation, MeanMode, covariance, covariance_ci_batch_means,
     covariance_ci_normal, max_relative_deviation, sample_covariance, zero_mean_covariance,
 };
+pub use equivalence::{Equivalence, Verdict, equivalence};
 pub use error::StatsError;
 pub use error_series::{
     DistanceSeries, distance_2d, distance_3d, distance_series, distance_series_2d,
     distance_series_3d,
 };
 pub use histogram::Histogram;
+pub use metric_summary::{
+    Divergence, IntervalMethod, MetricKind, MetricSummary, SummarySettings, row_seed,
+    summarize_metric,
+};
 pub use monte_carlo::{
     AggregateRow, Aggregator, CiBand, MeanCi, MeanInterval, mean_and_ci95, mean_ci,
     mean_curve_ci95, mean_interval,
 };
 pub use proportion::{MedianCi, Proportion, clopper_pearson, median_ci};
-pub use quantile::{chi2_cdf, chi2_quantile, normal_quantile, student_t_quantile};
+pub use quantile::{chi2_cdf, chi2_quantile, normal_cdf, normal_quantile, student_t_quantile};
 pub use run_stats::RunStats;
 pub use sample::{Quartiles, median, paired_mean_ci, quantile, rms};

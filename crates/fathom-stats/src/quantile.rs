@@ -36,6 +36,12 @@ pub fn normal_quantile(p: f64) -> Result<f64, StatsError> {
     Ok(n.inverse_cdf(p))
 }
 
+/// CDF of the standard normal distribution, `Phi(x)` (`0` at `-inf`, `1` at `+inf`;
+/// NaN for NaN).
+pub fn normal_cdf(x: f64) -> f64 {
+    0.5 * statrs::function::erf::erfc(-x / std::f64::consts::SQRT_2)
+}
+
 /// Quantile of the Student-t distribution with `dof` degrees of freedom.
 ///
 /// # Errors

@@ -24,6 +24,7 @@ mod plaza;
 mod quadrotor_ins;
 mod report_text;
 mod smoother;
+mod statistics;
 mod urban;
 mod user_scenarios;
 mod vkf;

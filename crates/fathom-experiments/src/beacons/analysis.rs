@@ -2,7 +2,7 @@
 //! error statistics, outlier recall and false rejections (the rows), and the claims.
 
 use fathom_estimators::schemes::UpdateScheme;
-use fathom_stats::{clopper_pearson, mean_and_ci95};
+use fathom_stats::{MetricSummary, clopper_pearson};
 
 use super::paper::{PAPER_INJECTED, PAPER_TABLE13, PAPER_TABLE14};
 use super::run::{BatchSums, KeptStats};
@@ -10,18 +10,34 @@ use super::scenario::Checked;
 use super::{MAIN_CASE, method};
 use fathom_report::output::{Claim, Row, fixed as f};
 use fathom_sim::SimError;
-use fathom_sim::experiment::Analysis;
+use fathom_sim::experiment::{Analysis, row_of_summary};
 
-/// A Monte Carlo mean and its 95 % CI.
+/// A Monte Carlo mean and its 95 % CI, with the whole summary of its row.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Agg {
     pub(super) mean: f64,
     pub(super) ci: [f64; 2],
+    summary: Option<MetricSummary>,
 }
 
-fn agg(values: &[f64]) -> Result<Agg, SimError> {
-    let (mean, ci) = mean_and_ci95(values)?;
-    Ok(Agg { mean, ci })
+/// The summary of the row `m` / `metric` over the run `values`.
+fn agg(out: &Analysis, m: &str, metric: &str, values: &[f64]) -> Result<Agg, SimError> {
+    let s = out.summarize(m, metric, values)?;
+    Ok(Agg {
+        mean: s.mean,
+        ci: s.ci95.unwrap_or([s.mean; 2]),
+        summary: Some(s),
+    })
+}
+
+impl Agg {
+    /// The row of `m` / `metric` (a value without runs has no interval).
+    fn row(&self, m: &str, metric: &str) -> Row {
+        self.summary.map_or_else(
+            || Row::new(m, metric, self.mean),
+            |s| row_of_summary(m, metric, &s),
+        )
+    }
 }
 
 /// The aggregated statistics of one scheme on one case.
@@ -42,8 +58,11 @@ pub(super) struct SchemeTable {
 /// `table[case][scheme]`.
 pub(super) type Table = Vec<Vec<SchemeTable>>;
 
-/// The aggregated statistics of scheme `si` on case `ci` of `per_run`.
+/// The aggregated statistics of scheme `si` on case `ci` of `per_run`, the rows'
+/// method name being `m`.
 fn aggregate(
+    out: &Analysis,
+    m: &str,
     per_run: &[Vec<Vec<KeptStats>>],
     sums: &BatchSums,
     ci: usize,
@@ -54,11 +73,12 @@ fn aggregate(
     };
     let recall_vals = get(&|s| s.recall);
     let recall = if recall_vals.iter().all(|v| v.is_finite()) {
-        agg(&recall_vals)?
+        agg(out, m, "outlier_recall", &recall_vals)?
     } else {
         Agg {
             mean: f64::NAN,
             ci: [f64::NAN; 2],
+            summary: None,
         }
     };
     let avg = |g: &dyn Fn(&KeptStats) -> f64| get(g).iter().sum::<f64>() / per_run.len() as f64;
@@ -67,12 +87,17 @@ fn aggregate(
     let (pooled_rejected, pooled_injected) = (acc.pooled_rejected, acc.pooled_injected);
     Ok(SchemeTable {
         stats: [
-            agg(&get(&|s| s.stats.mean))?,
-            agg(&get(&|s| s.stats.std))?,
-            agg(&get(&|s| s.stats.max))?,
-            agg(&get(&|s| s.stats.rmse))?,
+            agg(out, m, "mean", &get(&|s| s.stats.mean))?,
+            agg(out, m, "std", &get(&|s| s.stats.std))?,
+            agg(out, m, "max", &get(&|s| s.stats.max))?,
+            agg(out, m, "rmse", &get(&|s| s.stats.rmse))?,
             recall,
-            agg(&get(&|s| s.false_rejections as f64))?,
+            agg(
+                out,
+                m,
+                "false_rejections",
+                &get(&|s| s.false_rejections as f64),
+            )?,
         ],
         nees: avg(&|s| s.nees_mean),
         rejected: avg(&|s| s.rejected as f64),
@@ -111,20 +136,12 @@ fn push_rows(out: &mut Analysis, m: &str, t: &SchemeTable, paper: (Option<[f64; 
         .iter()
         .enumerate()
     {
-        out.row(
-            Row::new(m, *metric, a.mean)
-                .with_paper(paper.0.map(|p| p[k]))
-                .with_ci95(a.ci[0], a.ci[1]),
-        );
+        out.row(a.row(m, metric).with_paper(paper.0.map(|p| p[k])));
     }
     if recall.mean.is_finite() {
-        out.row(
-            Row::new(m, "outlier_recall", recall.mean)
-                .with_paper(paper.1)
-                .with_ci95(recall.ci[0], recall.ci[1]),
-        );
+        out.row(recall.row(m, "outlier_recall").with_paper(paper.1));
     }
-    out.row(Row::new(m, "false_rejections", fr.mean).with_ci95(fr.ci[0], fr.ci[1]));
+    out.row(fr.row(m, "false_rejections"));
 }
 
 /// What the figures and the report are drawn from, besides the runs.
@@ -153,13 +170,14 @@ pub(super) fn analyse(
     for (ci, case) in checked.cases.iter().enumerate() {
         let mut row_c = Vec::new();
         for (si, &scheme) in schemes.iter().enumerate() {
-            let t = aggregate(per_run, sums, ci, si)?;
+            let m = method(scheme, &case.name);
+            let t = aggregate(out, &m, per_run, sums, ci, si)?;
             let paper = if case.name == MAIN_CASE {
                 paper_of(scheme)
             } else {
                 (None, None)
             };
-            push_rows(out, &method(scheme, &case.name), &t, paper);
+            push_rows(out, &m, &t, paper);
             row_c.push(t);
         }
         table.push(row_c);
@@ -169,8 +187,8 @@ pub(super) fn analyse(
     for (layout, (runs, layout_sums)) in checked.layouts.iter().zip(layouts) {
         let mut row = Vec::new();
         for (si, &scheme) in schemes.iter().enumerate() {
-            let t = aggregate(runs, layout_sums, 0, si)?;
             let m = format!("{}@{}", method(scheme, MAIN_CASE), layout.name);
+            let t = aggregate(out, &m, runs, layout_sums, 0, si)?;
             push_rows(out, &m, &t, paper_of(scheme));
             row.push(t);
         }
@@ -208,6 +226,7 @@ fn smoothed_rows(
     out: &mut Analysis,
 ) -> Result<String, SimError> {
     let mut table = Vec::new();
+    out.unit("nees", "1");
     for (ci, case) in checked.cases.iter().enumerate() {
         for (si, &scheme) in checked.schemes.iter().enumerate() {
             let sm: Vec<_> = per_run
@@ -227,8 +246,8 @@ fn smoothed_rows(
             ];
             let mut aggs = Vec::with_capacity(metrics.len());
             for (metric, v) in &metrics {
-                let a = agg(v)?;
-                out.row(Row::new(&m, *metric, a.mean).with_ci95(a.ci[0], a.ci[1]));
+                let a = agg(out, &m, metric, v)?;
+                out.row(a.row(&m, metric));
                 aggs.push(a);
             }
             // Paired: smoothed minus filtered mean error, per run.

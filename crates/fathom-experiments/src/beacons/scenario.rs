@@ -69,6 +69,10 @@ pub struct BeaconsScenario {
     /// Range: a list of `"AS"`, `"SC"`, `"SI"`. Default: all three.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub methods: Option<Vec<String>>,
+    /// `[statistics]`: how the runs of each row are summarized (bootstrap resamples,
+    /// divergence factor); defaults when absent.
+    #[serde(default)]
+    pub statistics: fathom_sim::statistics::StatisticsParams,
 }
 
 /// `[timing]`: synchronous and asynchronous clocks (Tables 2-3).

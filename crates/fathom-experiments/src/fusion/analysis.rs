@@ -8,7 +8,7 @@ use rand_chacha::ChaCha8Rng;
 use super::Prepared;
 use super::scenario::FusionSetup;
 use super::sim::{self, Method, MethodMetrics, Reading, RunConfig, RunOutput, method_metrics};
-use fathom_report::output::{Claim, Row};
+use fathom_report::output::Claim;
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
 use fathom_traj::FusionMission;
@@ -268,12 +268,12 @@ pub(super) fn analyse(
         for m in Method::ALL {
             let paper = paper_values(m);
             for (k, metric) in METRICS.iter().enumerate() {
-                let (mean, [lo, hi]) = mean_and_ci95(&values(runs, m, metric))?;
-                out.row(
-                    Row::new(row_method(m, reading, primary), *metric, mean)
-                        .with_paper(paper.and_then(|p| p.get(k).copied()))
-                        .with_ci95(lo, hi),
-                );
+                out.runs_row(
+                    &row_method(m, reading, primary),
+                    metric,
+                    &values(runs, m, metric),
+                )?
+                .paper = paper.and_then(|p| p.get(k).copied());
             }
         }
     }
@@ -295,10 +295,8 @@ pub(super) fn analyse(
                 .fold(0.0, f64::max)
         })
         .collect();
-    let (m_fb, [lo, hi]) = mean_and_ci95(&ins_fb_mean)?;
-    out.row(Row::new("EFF", "ins_integrator_mean_err", m_fb).with_ci95(lo, hi));
-    let (m_fbx, [lo, hi]) = mean_and_ci95(&ins_fb_max)?;
-    out.row(Row::new("EFF", "ins_integrator_max_err", m_fbx).with_ci95(lo, hi));
+    out.runs_row("EFF", "ins_integrator_mean_err", &ins_fb_mean)?;
+    out.runs_row("EFF", "ins_integrator_max_err", &ins_fb_max)?;
 
     for c in claims(setup, &results)? {
         out.claim(c);

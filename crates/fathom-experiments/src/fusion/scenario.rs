@@ -63,6 +63,10 @@ pub struct FusionScenario {
     /// Default: all.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub methods: Option<Vec<String>>,
+    /// `[statistics]`: how the runs of each row are summarized (bootstrap resamples,
+    /// divergence factor); defaults when absent.
+    #[serde(default)]
+    pub statistics: fathom_sim::statistics::StatisticsParams,
 }
 
 /// `[mission]`: the cubic-spline UUV mission (paper §4.1).

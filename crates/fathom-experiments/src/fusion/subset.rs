@@ -4,13 +4,11 @@
 //! says what was left out (the claims, the other `v_DVL` reading and the sensitivity
 //! sweeps, which compare the methods).
 
-use fathom_stats::mean_and_ci95;
-
 use super::Prepared;
 use super::analysis::{METRICS, RunResult, UNITS, paper_values, values};
 use super::figures::mean_series;
 use super::sim::Method;
-use fathom_report::output::{Row, fixed as f, md_table};
+use fathom_report::output::{fixed as f, md_table};
 use fathom_report::plot::{LinePlot, Series};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
@@ -31,13 +29,10 @@ pub(super) fn analyse(
         let paper = paper_values(m);
         let mut cells = vec![m.name().to_string()];
         for (k, metric) in METRICS.iter().enumerate() {
-            let (mean, [lo, hi]) = mean_and_ci95(&values(&results, m, metric))?;
-            out.row(
-                Row::new(m.name(), *metric, mean)
-                    .with_paper(paper.and_then(|p| p.get(k).copied()))
-                    .with_ci95(lo, hi),
-            );
-            cells.push(format!("{} [{}, {}]", f(mean, 3), f(lo, 3), f(hi, 3)));
+            let row = out.runs_row(m.name(), metric, &values(&results, m, metric))?;
+            row.paper = paper.and_then(|p| p.get(k).copied());
+            let [lo, hi] = row.ci95.unwrap_or([row.value; 2]);
+            cells.push(format!("{} [{}, {}]", f(row.value, 3), f(lo, 3), f(hi, 3)));
         }
         table.push(cells);
     }
@@ -49,11 +44,16 @@ pub(super) fn analyse(
                 .map(|r| g(&r.output.ins_err_with_feedback))
                 .collect()
         };
-        let (m, [lo, hi]) =
-            mean_and_ci95(&per_run(|s| s.iter().sum::<f64>() / s.len().max(1) as f64))?;
-        out.row(Row::new("EFF", "ins_integrator_mean_err", m).with_ci95(lo, hi));
-        let (m, [lo, hi]) = mean_and_ci95(&per_run(|s| s.iter().copied().fold(0.0, f64::max)))?;
-        out.row(Row::new("EFF", "ins_integrator_max_err", m).with_ci95(lo, hi));
+        out.runs_row(
+            "EFF",
+            "ins_integrator_mean_err",
+            &per_run(|s| s.iter().sum::<f64>() / s.len().max(1) as f64),
+        )?;
+        out.runs_row(
+            "EFF",
+            "ins_integrator_max_err",
+            &per_run(|s| s.iter().copied().fold(0.0, f64::max)),
+        )?;
     }
     out.extra(
         "course_changes_s",

@@ -2,7 +2,7 @@
 //! the design, the long run's convergence, the rows and the claims.
 
 use fathom_sensors::design_covariance;
-use fathom_stats::{mean_ci, mean_interval};
+use fathom_stats::mean_interval;
 use nalgebra::DMatrix;
 
 use super::paper::paper_matrix;
@@ -10,7 +10,7 @@ use super::run::LongRun;
 use super::scenario::Checked;
 use fathom_report::output::{Claim, Row, fixed as f};
 use fathom_sim::SimError;
-use fathom_sim::experiment::Analysis;
+use fathom_sim::experiment::{Analysis, row_of_summary};
 
 /// Per-entry statistics over runs.
 #[derive(Debug, Clone, Copy)]
@@ -22,12 +22,16 @@ pub(super) struct EntryStats {
     pub(super) single_run: [f64; 2],
 }
 
-fn entry_stats(values: &[f64], simultaneous_level: f64) -> Result<EntryStats, SimError> {
-    let ci = mean_ci(values)?;
+/// The statistics of one entry; `ci95` is the interval of its row (`summary`).
+fn entry_stats(
+    values: &[f64],
+    summary: &fathom_stats::MetricSummary,
+    simultaneous_level: f64,
+) -> Result<EntryStats, SimError> {
     let sim = mean_interval(values, simultaneous_level)?;
     Ok(EntryStats {
-        mean: ci.mean,
-        ci95: ci.bounds(),
+        mean: summary.mean,
+        ci95: summary.ci95.unwrap_or([summary.mean; 2]),
         simultaneous: sim.interval.unwrap_or([sim.mean, sim.mean]),
         single_run: [
             fathom_stats::quantile(values, 0.025)?,
@@ -100,17 +104,19 @@ pub(super) fn analyse(
         for i in 0..5 {
             for j in 0..5 {
                 let values: Vec<f64> = per_run.iter().map(|covs| covs[ci][(i, j)]).collect();
-                let st = entry_stats(&values, simultaneous_level)?;
+                let metric = format!("cov_{}{}", i + 1, j + 1);
+                // Four ranges and the depth, all in m: covariances in m². A variance
+                // (diagonal) is non-negative; a covariance has either sign.
+                out.unit(metric.clone(), "m²");
+                if i != j {
+                    out.signed(metric.clone());
+                }
+                let p = paper.map(|m| m[i][j]);
+                let summary = out.summarize(&case.name, &metric, &values)?;
+                out.row(row_of_summary(&case.name, &metric, &summary).with_paper(p));
+                let st = entry_stats(&values, &summary, simultaneous_level)?;
                 mean_cov[(i, j)] = st.mean;
                 let d = design[(i, j)];
-                let p = paper.map(|m| m[i][j]);
-                // Four ranges and the depth, all in m: covariances in m².
-                out.unit(format!("cov_{}{}", i + 1, j + 1), "m²");
-                out.row(
-                    Row::new(&case.name, format!("cov_{}{}", i + 1, j + 1), st.mean)
-                        .with_paper(p)
-                        .with_ci95(st.ci95[0], st.ci95[1]),
-                );
                 if j >= i {
                     n_entries += 1;
                     let bits: Vec<u64> = values.iter().map(|v| v.to_bits()).collect();

@@ -43,6 +43,10 @@ pub struct NoiseScenario {
     pub long_run: LongRunToml,
     /// The noise configurations (eqs. 5-9).
     pub cases: Vec<CaseToml>,
+    /// `[statistics]`: how the runs of each row are summarized (bootstrap resamples,
+    /// divergence factor); defaults when absent.
+    #[serde(default)]
+    pub statistics: fathom_sim::statistics::StatisticsParams,
 }
 
 /// `[timing]`: synchronous sampling.

@@ -3,15 +3,13 @@
 //! differences the claims read, the GNSS shadowing per scenario, the ablations
 //! against the main batch's runs of the same index, then claims, figures and report.
 
-use fathom_stats::{mean_and_ci95, paired_mean_ci};
-
 use super::check::Checked;
 use super::claims::{DIFFERENCES, claims, diff_row, method_row};
 use super::paper::paper_value;
 use super::record::{BatchFold, KeptRun};
 use super::trace::MethodStats;
 use super::world::Prepared;
-use fathom_report::output::{CsvCell, Row};
+use fathom_report::output::CsvCell;
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
 
@@ -27,15 +25,45 @@ pub(super) fn values(kept: &[KeptRun], s: usize, m: usize, metric: usize) -> Vec
         .collect()
 }
 
-fn mean_row(method: &str, metric: &str, v: &[f64]) -> Result<Row, SimError> {
-    let (mean, ci) = mean_and_ci95(v)?;
-    Ok(Row::new(method, metric, mean).with_ci95(ci[0], ci[1]))
+/// The row of the paired difference `a - b` of `metric` (a signed metric
+/// `diff_<metric>`: Student-t interval).
+fn diff(
+    out: &mut Analysis,
+    method: &str,
+    metric: &str,
+    a: &[f64],
+    b: &[f64],
+) -> Result<(), SimError> {
+    let name = format!("diff_{metric}");
+    out.signed(name.clone());
+    let d: Vec<f64> = a.iter().zip(b).map(|(x, y)| x - y).collect();
+    out.runs_row(method, &name, &d)?;
+    Ok(())
 }
 
-fn diff(method: String, metric: &str, a: &[f64], b: &[f64]) -> Result<Row, SimError> {
-    let d = paired_mean_ci(a, b)?;
-    let [lo, hi] = d.bounds();
-    Ok(Row::new(method, format!("diff_{metric}"), d.mean).with_ci95(lo, hi))
+/// The unit of every metric of the rows.
+fn declare_units(out: &mut Analysis) {
+    for (metric, unit) in [
+        ("rmse_h", "m"),
+        ("rmse_3d", "m"),
+        ("rmse_vel", "m/s"),
+        ("rmse_roll", "deg"),
+        ("rmse_pitch", "deg"),
+        ("rmse_yaw", "deg"),
+        ("mean_3d", "m"),
+        ("p95_3d", "m"),
+        ("max_att", "deg"),
+        ("time_map_aided_s", "s"),
+        ("nees_mean", "1"),
+        ("diff_rmse_h", "m"),
+        ("diff_rmse_3d", "m"),
+        ("diff_rmse_yaw", "deg"),
+        ("los_satellites_mean", "1"),
+        ("shadowed_fraction", "1"),
+        ("flight_duration_s", "s"),
+    ] {
+        out.unit(metric, unit);
+    }
 }
 
 /// Computes the rows, the claims and the per-run CSV file.
@@ -49,13 +77,13 @@ pub(super) fn analyse(
     let (Some(main), Some(_)) = (kept.first(), folds.first()) else {
         return Err(SimError::invalid_argument("urban", "no main batch"));
     };
+    declare_units(out);
     for (s, spec) in c.scenes.iter().enumerate() {
         for (m, method) in c.methods.iter().enumerate() {
             let name = method_row(&spec.name, *method);
             for (k, metric) in MethodStats::METRICS.iter().enumerate() {
-                let row = mean_row(&name, metric, &values(main, s, m, k))?
-                    .with_paper(paper_value(spec.paper, *method, metric));
-                out.row(row);
+                out.runs_row(&name, metric, &values(main, s, m, k))?.paper =
+                    paper_value(spec.paper, *method, metric);
             }
         }
         for (a, b, metric) in DIFFERENCES {
@@ -64,24 +92,21 @@ pub(super) fn analyse(
                 continue;
             };
             let k = metric_index(metric).unwrap_or(0);
-            out.row(diff(
-                diff_row(&spec.name, a, b),
+            diff(
+                out,
+                &diff_row(&spec.name, a, b),
                 metric,
                 &values(main, s, ia, k),
                 &values(main, s, ib, k),
-            )?);
+            )?;
         }
         let g = format!("{}/GNSS", spec.name);
         let per = |f: fn(&super::record::KeptScene) -> f64| -> Vec<f64> {
             main.iter().map(|r| f(&r[s])).collect()
         };
-        out.row(mean_row(&g, "los_satellites_mean", &per(|k| k.los_mean))?);
-        out.row(mean_row(
-            &g,
-            "shadowed_fraction",
-            &per(|k| k.shadowed_fraction),
-        )?);
-        out.row(mean_row(&g, "flight_duration_s", &per(|k| k.duration_s))?);
+        out.runs_row(&g, "los_satellites_mean", &per(|k| k.los_mean))?;
+        out.runs_row(&g, "shadowed_fraction", &per(|k| k.shadowed_fraction))?;
+        out.runs_row(&g, "flight_duration_s", &per(|k| k.duration_s))?;
     }
     // ablations: the same metrics, and paired differences against the main batch's
     // runs of the same index
@@ -98,13 +123,13 @@ pub(super) fn analyse(
         );
         for (k, metric) in MethodStats::METRICS.iter().enumerate() {
             let v: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k]).collect();
-            out.row(mean_row(&base, metric, &v)?);
+            out.runs_row(&base, metric, &v)?;
         }
         for metric in ["rmse_h", "rmse_3d", "rmse_yaw"] {
             let k = metric_index(metric).unwrap_or(0);
             let v: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k]).collect();
             let paired = &values(main, a.scene, m, k)[..v.len()];
-            out.row(diff(format!("{base}-vs-main"), metric, &v, paired)?);
+            diff(out, &format!("{base}-vs-main"), metric, &v, paired)?;
         }
     }
     // The claims compare the methods: made only when every method ran.

@@ -6,8 +6,8 @@
 //! | --- | --- | --- |
 //! | `grekf_bridge_rms_le_0_3` | `bridge/GREKF` `rmse_3d` | the CI's upper end ≤ 0.3 m |
 //! | `grekf_bridge_att_lt_0_5` | `bridge/GREKF` `max_att` | the CI's upper end < 0.5° |
-//! | `mgpmf_buildings_table2_<metric>` | `buildings/MGPMF` Table 2 rows, `mean_3d`, `p95_3d` | the CI widened by the tolerance × paper value contains the paper value |
-//! | `mgpmf_buildings_table2` | the same | every entry does |
+//! | `mgpmf_buildings_table2_<metric>` | `buildings/MGPMF` Table 2 rows, `mean_3d`, `p95_3d` | equivalence: the whole CI lies inside the band paper value ± tolerance × paper value (`agrees`; `differs` when wholly outside, else `inconclusive`) |
+//! | `mgpmf_buildings_table2` | the same | every entry agrees |
 //! | `los_check_improves_gps` | `buildings/GPS/INS-vs-GPS/INS-all-sats` `diff_rmse_3d` | the paired CI lies below 0 |
 //! | `map_aided_beats_ins_only` | `bridge/GREKF-vs-INS-only`, `buildings/MGPMF-vs-INS-only` `diff_rmse_3d` | both paired CIs lie below 0 |
 //! | `mgpmf_beats_grekf_near_walls` | `buildings/MGPMF-vs-GREKF` `diff_rmse_h` | the paired CI lies below 0 |
@@ -53,10 +53,10 @@ fn ci_text(r: &Row, d: usize) -> String {
     }
 }
 
-/// Whether the paper value `p` lies in the row's CI widened by `tol * p` each side.
-fn agrees(r: &Row, p: f64, tol: f64) -> bool {
-    let [lo, hi] = r.ci95.unwrap_or([r.value, r.value]);
-    lo - tol * p.abs() <= p && p <= hi + tol * p.abs()
+/// The equivalence of the row's CI with the band `p ± tol * |p|` (`None` for a
+/// non-finite number, which a checked row never has).
+fn judge(r: &Row, p: f64, tol: f64) -> Option<fathom_stats::Equivalence> {
+    fathom_stats::equivalence(r.ci95.unwrap_or([r.value, r.value]), p, tol * p.abs()).ok()
 }
 
 /// The claims of the rows; `tolerance` is the Table 2 tolerance (a fraction of the
@@ -97,30 +97,44 @@ pub fn claims(rows: &[Row], tolerance: f64) -> Vec<Claim> {
         let Some(r) = find(rows, &buildings, metric) else {
             continue;
         };
-        let ok = agrees(r, p, tolerance);
-        all.push((metric, ok));
-        out.push(Claim::new(
+        let Some(e) = judge(r, p, tolerance) else {
+            continue;
+        };
+        all.push((metric, e.verdict));
+        out.push(Claim::equivalence(
             format!("mgpmf_buildings_table2_{metric}"),
             format!("around the buildings the MGPMF's {metric} matches the paper's {p}"),
-            ok,
+            e.verdict.name(),
+            e.band,
             format!(
-                "buildings/MGPMF {metric} {} (95 % CI) against the paper's {p}; inside when the CI widened by {} % of the paper value contains it",
+                "buildings/MGPMF {metric} {} ({}) against the band [{}, {}] (the paper's {p} ± {} %): {}",
                 ci_text(r, 4),
-                f(100.0 * tolerance, 0)
+                r.ci_method.as_deref().unwrap_or("95 % CI"),
+                f(e.band[0], 4),
+                f(e.band[1], 4),
+                f(100.0 * tolerance, 0),
+                e.verdict.name()
             ),
         ));
     }
     if !all.is_empty() {
-        let inside: Vec<&str> = all.iter().filter(|e| e.1).map(|e| e.0).collect();
-        let outside: Vec<&str> = all.iter().filter(|e| !e.1).map(|e| e.0).collect();
+        let with = |v: fathom_stats::Verdict| -> String {
+            let names: Vec<&str> = all.iter().filter(|e| e.1 == v).map(|e| e.0).collect();
+            if names.is_empty() {
+                "none".into()
+            } else {
+                names.join(", ")
+            }
+        };
         out.push(Claim::new(
             "mgpmf_buildings_table2",
             "around the buildings the MGPMF reproduces Table 2 (RMSE of horizontal, 3-D position, velocity, roll, pitch, yaw; accuracy 1.18 m, precision 2.12 m)",
-            outside.is_empty(),
+            all.iter().all(|e| e.1 == fathom_stats::Verdict::Agrees),
             format!(
-                "inside the tolerance: {}; outside: {} (per-entry claims mgpmf_buildings_table2_<metric>)",
-                if inside.is_empty() { "none".into() } else { inside.join(", ") },
-                if outside.is_empty() { "none".into() } else { outside.join(", ") }
+                "agrees: {}; differs: {}; inconclusive: {} (per-entry claims mgpmf_buildings_table2_<metric>; holds when every entry agrees)",
+                with(fathom_stats::Verdict::Agrees),
+                with(fathom_stats::Verdict::Differs),
+                with(fathom_stats::Verdict::Inconclusive)
             ),
         ));
     }
@@ -198,7 +212,7 @@ mod tests {
     use super::*;
 
     fn row(method: &str, metric: &str, v: f64, ci: [f64; 2]) -> Row {
-        Row::new(method, metric, v).with_ci95(ci[0], ci[1])
+        Row::new(method, metric, v).with_ci95(ci[0], ci[1], "bootstrap-bca")
     }
 
     fn rows() -> Vec<Row> {
@@ -324,7 +338,7 @@ mod tests {
                 );
             }
         }
-        // the tolerance is a setting: 0 % leaves only entries whose CI holds the paper
+        // the tolerance is a setting: 0 % agrees with nothing but a point on the paper
         let mut r = rows();
         for x in &mut r {
             if x.method == "buildings/MGPMF" && x.metric == "rmse_h" {
@@ -333,6 +347,26 @@ mod tests {
         }
         assert!(verdict(&claims(&r, 0.25), "mgpmf_buildings_table2_rmse_h"));
         assert!(!verdict(&claims(&r, 0.0), "mgpmf_buildings_table2_rmse_h"));
+        // More divergence widens the interval: the verdict turns inconclusive, never
+        // agrees (the old rule, "the CI widened by the tolerance contains the paper",
+        // held here).
+        let p = TABLE2[0].1;
+        for hi in [1.3 * p, 3.0 * p, 30.0 * p] {
+            let mut r = rows();
+            for x in &mut r {
+                if x.method == "buildings/MGPMF" && x.metric == TABLE2[0].0 {
+                    *x = row("buildings/MGPMF", TABLE2[0].0, p, [0.95 * p, hi]);
+                }
+            }
+            let c = claims(&r, 0.25);
+            let e = c
+                .iter()
+                .find(|c| c.id == format!("mgpmf_buildings_table2_{}", TABLE2[0].0))
+                .unwrap();
+            assert_eq!(e.verdict.as_deref(), Some("inconclusive"), "{e:?}");
+            assert!(!e.holds);
+            assert!(!verdict(&c, "mgpmf_buildings_table2"));
+        }
         // absent rows: the claim is not evaluated
         assert!(claims(&[], 0.25).is_empty());
     }

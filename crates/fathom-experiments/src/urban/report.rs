@@ -319,7 +319,7 @@ mod tests {
 
     #[test]
     fn relation_reads_the_ci() {
-        let r = |lo, hi| Row::new("a", "b", 0.5 * (lo + hi)).with_ci95(lo, hi);
+        let r = |lo, hi| Row::new("a", "b", 0.5 * (lo + hi)).with_ci95(lo, hi, "student-t");
         assert_eq!(relation(Some(&r(-2.0, -1.0))), "lower than");
         assert_eq!(relation(Some(&r(1.0, 2.0))), "higher than");
         assert_eq!(relation(Some(&r(-1.0, 2.0))), "not distinguishable from");

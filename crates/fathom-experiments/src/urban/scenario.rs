@@ -65,6 +65,10 @@ pub struct UrbanScenario {
     pub scenarios: Vec<SceneToml>,
     /// Ablations the paper motivates (extra batches on one scenario and method).
     pub ablations: AblationsToml,
+    /// `[statistics]`: how the runs of each row are summarized (bootstrap resamples,
+    /// divergence factor); defaults when absent.
+    #[serde(default)]
+    pub statistics: fathom_sim::statistics::StatisticsParams,
 }
 
 fathom_sim::monte_carlo_scenario!(UrbanScenario);

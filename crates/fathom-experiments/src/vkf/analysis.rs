@@ -150,6 +150,15 @@ pub(super) fn analyse(
     ]) {
         out.unit(metric, unit);
     }
+    // Errors with a sign (the VKF's scale-factor and bias errors), growth rates (the
+    // error may shrink) and paired differences.
+    for metric in [
+        "growth_rate_invalid",
+        "growth_rate_valid",
+        "final_h_minus_default",
+    ] {
+        out.signed(metric);
+    }
 
     let all: Vec<MethodMetrics> = (0..METHODS.len()).map(|m| metrics(runs, m)).collect();
     let mut table = Vec::new();
@@ -160,12 +169,8 @@ pub(super) fn analyse(
             ("rms_h", &all[m].rms_h),
             ("rms_vel", &all[m].rms_vel),
         ] {
-            let (mean, ci) = mean_and_ci95(values)?;
-            out.row(
-                Row::new(*name, metric, mean)
-                    .with_paper(None)
-                    .with_ci95(ci[0], ci[1]),
-            );
+            let row = out.runs_row(name, metric, values)?;
+            let (mean, ci) = (row.value, row.ci95.unwrap_or([row.value; 2]));
             cells.push(format!("{} [{}, {}]", f(mean, 2), f(ci[0], 2), f(ci[1], 2)));
         }
         // The per-run final error is heavy-tailed for a method that loses lock in some
@@ -174,7 +179,7 @@ pub(super) fn analyse(
         let med = median_ci(&all[m].final_h, 0.95)?;
         let mut row = Row::new(*name, "final_h_median", med.median);
         if let Some([lo, hi]) = med.interval {
-            row = row.with_ci95(lo, hi);
+            row = row.with_ci95(lo, hi, "order-statistic");
         }
         out.row(row);
         let beyond = all[m]
@@ -221,20 +226,16 @@ pub(super) fn analyse(
         if sf.len() < 2 {
             continue;
         }
-        let (sf_m, sf_ci) = mean_and_ci95(&sf)?;
-        let (b_m, b_ci) = mean_and_ci95(&b)?;
-        out.unit(format!("sf_error_pct_{}", i + 1), "%");
-        out.unit(format!("bias_error_{}", i + 1), "m/s");
-        out.row(
-            Row::new("VKF", format!("sf_error_pct_{}", i + 1), sf_m)
-                .with_paper(None)
-                .with_ci95(sf_ci[0], sf_ci[1]),
+        let (sf_name, b_name) = (
+            format!("sf_error_pct_{}", i + 1),
+            format!("bias_error_{}", i + 1),
         );
-        out.row(
-            Row::new("VKF", format!("bias_error_{}", i + 1), b_m)
-                .with_paper(None)
-                .with_ci95(b_ci[0], b_ci[1]),
-        );
+        out.unit(sf_name.clone(), "%");
+        out.unit(b_name.clone(), "m/s");
+        out.signed(sf_name.clone());
+        out.signed(b_name.clone());
+        let sf_m = out.runs_row("VKF", &sf_name, &sf)?.value;
+        let b_m = out.runs_row("VKF", &b_name, &b)?.value;
         sfb_table.push(vec![
             format!(
                 "{} ({:.0}-{:.0} s)",
@@ -256,10 +257,8 @@ pub(super) fn analyse(
         .collect();
     let r_in: Vec<f64> = rates.iter().map(|r| r.0).collect();
     let r_out: Vec<f64> = rates.iter().map(|r| r.1).collect();
-    let (rin_m, rin_ci) = mean_and_ci95(&r_in)?;
-    let (rout_m, rout_ci) = mean_and_ci95(&r_out)?;
-    out.row(Row::new("INS-DVL", "growth_rate_invalid", rin_m).with_ci95(rin_ci[0], rin_ci[1]));
-    out.row(Row::new("INS-DVL", "growth_rate_valid", rout_m).with_ci95(rout_ci[0], rout_ci[1]));
+    let rin_m = out.runs_row("INS-DVL", "growth_rate_invalid", &r_in)?.value;
+    let rout_m = out.runs_row("INS-DVL", "growth_rate_valid", &r_out)?.value;
 
     // Literal-bias configuration.
     let mut literal_table = Vec::new();
@@ -269,14 +268,18 @@ pub(super) fn analyse(
         for (m, name) in METHODS.iter().enumerate() {
             let lm = metrics(literal, m);
             let dm = metrics(&runs[..literal.len()], m);
-            let (fm, fci) = mean_and_ci95(&lm.final_h)?;
-            let (rm, rci) = mean_and_ci95(&lm.rms_h)?;
             let label = format!("{name} [b=0.5 m/s]");
-            out.row(Row::new(&label, "final_h", fm).with_ci95(fci[0], fci[1]));
-            out.row(Row::new(&label, "rms_h", rm).with_ci95(rci[0], rci[1]));
+            let interval = |r: &Row| (r.value, r.ci95.unwrap_or([r.value; 2]));
+            let (fm, fci) = interval(out.runs_row(&label, "final_h", &lm.final_h)?);
+            let (rm, rci) = interval(out.runs_row(&label, "rms_h", &lm.rms_h)?);
             // Same run streams in both batches: the change is a paired difference.
-            let (dd, dci) = paired(&lm.final_h, &dm.final_h)?;
-            out.row(Row::new(&label, "final_h_minus_default", dd).with_ci95(dci[0], dci[1]));
+            let d: Vec<f64> = lm
+                .final_h
+                .iter()
+                .zip(&dm.final_h)
+                .map(|(a, b)| a - b)
+                .collect();
+            let (dd, dci) = interval(out.runs_row(&label, "final_h_minus_default", &d)?);
             let (dfm, _) = mean_and_ci95(&dm.final_h)?;
             let (drm, _) = mean_and_ci95(&dm.rms_h)?;
             lit_finals.push((dfm, fm));
@@ -295,8 +298,8 @@ pub(super) fn analyse(
             .collect();
         if b.len() >= 2 {
             lit_b_rms = rms_of(&b);
-            let (bm, bci) = mean_and_ci95(&b)?;
-            out.row(Row::new("VKF [b=0.5 m/s]", "bias_error_1", bm).with_ci95(bci[0], bci[1]));
+            out.signed("bias_error_1");
+            out.runs_row("VKF [b=0.5 m/s]", "bias_error_1", &b)?;
         }
     }
 

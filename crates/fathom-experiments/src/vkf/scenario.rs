@@ -104,6 +104,10 @@ pub struct VkfScenario {
     pub nav_filter: NavFilterToml,
     /// The 15-state error-state filter.
     pub eskf: EskfToml,
+    /// `[statistics]`: how the runs of each row are summarized (bootstrap resamples,
+    /// divergence factor); defaults when absent.
+    #[serde(default)]
+    pub statistics: fathom_sim::statistics::StatisticsParams,
 }
 
 /// `[route]`.

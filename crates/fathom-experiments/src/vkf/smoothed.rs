@@ -3,13 +3,13 @@
 //! intervals (where post-processing matters most): rows with 95 % CIs over runs, the
 //! paired claim and the report section.
 
-use fathom_stats::{mean_and_ci95, paired_mean_ci};
+use fathom_stats::paired_mean_ci;
 
 use super::Prepared;
 use super::sim::{ESKF, RunOutput, SmoothedErrors, VKF};
-use fathom_report::output::{Claim, Row, fixed as f, md_table};
+use fathom_report::output::{Claim, fixed as f, md_table};
 use fathom_sim::SimError;
-use fathom_sim::experiment::Analysis;
+use fathom_sim::experiment::{Analysis, row_of_summary};
 
 /// Indices of the 1 Hz samples (sample `i` is at `t = i` s) inside `invalid`.
 fn invalid_samples(invalid: &[(f64, f64)], n: usize) -> Vec<usize> {
@@ -57,6 +57,9 @@ pub(super) fn section(
     let n = runs.first().map_or(0, |r| r.err_h[VKF].len());
     let idx = invalid_samples(&p.shared.invalid, n);
     const METRICS: [&str; 3] = ["rms_h", "rms_h_invalid", "max_h_invalid"];
+    for metric in METRICS {
+        out.unit(metric, "m");
+    }
     let mut rows = Vec::new();
     let mut claim_parts = Vec::new();
     let mut holds = true;
@@ -77,13 +80,15 @@ pub(super) fn section(
         for (k, metric) in METRICS.iter().enumerate() {
             let vf: Vec<f64> = filtered.iter().map(|v| v[k]).collect();
             let vs: Vec<f64> = smoothed.iter().map(|v| v[k]).collect();
-            let (mf, cf) = mean_and_ci95(&vf)?;
-            let (ms, cs) = mean_and_ci95(&vs)?;
+            let sum_f = out.summarize(name, metric, &vf)?;
+            let sum_s = out.summarize(&sname, metric, &vs)?;
             // The filtered `rms_h` row exists already; the invalid-interval ones are new.
             if k > 0 {
-                out.row(Row::new(name, *metric, mf).with_ci95(cf[0], cf[1]));
+                out.row(row_of_summary(name, metric, &sum_f));
             }
-            out.row(Row::new(&sname, *metric, ms).with_ci95(cs[0], cs[1]));
+            out.row(row_of_summary(&sname, metric, &sum_s));
+            let (mf, cf) = (sum_f.mean, sum_f.ci95.unwrap_or([sum_f.mean; 2]));
+            let (ms, cs) = (sum_s.mean, sum_s.ci95.unwrap_or([sum_s.mean; 2]));
             cells_f.push(format!("{} [{}, {}]", f(mf, 2), f(cf[0], 2), f(cf[1], 2)));
             cells_s.push(format!("{} [{}, {}]", f(ms, 2), f(cs[0], 2), f(cs[1], 2)));
             if *metric == "rms_h_invalid" {

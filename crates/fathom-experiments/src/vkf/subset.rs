@@ -4,7 +4,7 @@
 //! left out (the claims, the literal-bias batch and the smoothed rows, which compare
 //! or need the methods together).
 
-use fathom_stats::{mean_and_ci95, median_ci};
+use fathom_stats::median_ci;
 
 use super::Prepared;
 use super::analysis::{METHOD_UNITS, mean_series, metrics};
@@ -35,14 +35,14 @@ pub(super) fn analyse(
             ("rms_h", &mm.rms_h),
             ("rms_vel", &mm.rms_vel),
         ] {
-            let (mean, [lo, hi]) = mean_and_ci95(values)?;
-            out.row(Row::new(name, metric, mean).with_ci95(lo, hi));
+            let row = out.runs_row(name, metric, values)?;
+            let (mean, [lo, hi]) = (row.value, row.ci95.unwrap_or([row.value; 2]));
             cells.push(format!("{} [{}, {}]", f(mean, 2), f(lo, 2), f(hi, 2)));
         }
         let med = median_ci(&mm.final_h, 0.95)?;
         let mut row = Row::new(name, "final_h_median", med.median);
         if let Some([lo, hi]) = med.interval {
-            row = row.with_ci95(lo, hi);
+            row = row.with_ci95(lo, hi, "order-statistic");
         }
         out.row(row);
         cells.push(med.interval.map_or_else(

@@ -93,9 +93,26 @@ fn with_ci_column(framing: Framing, rows: &[Row]) -> bool {
     framing.paper || rows.iter().any(|r| r.ci95.is_some())
 }
 
-/// The cells of one row: method, metric, unit, (paper,) value(, 95 % CI).
-fn row_cells(r: &Row, units: &BTreeMap<String, String>, paper: bool, ci: bool) -> Vec<String> {
-    let unit = units.get(&r.metric).map_or("", String::as_str);
+/// Whether the table has the median and diverged-runs columns: some row summarizes
+/// runs.
+fn with_median_columns(rows: &[Row]) -> bool {
+    rows.iter().any(|r| r.median.is_some())
+}
+
+/// The cells of one row: method, metric, unit, (paper,) value(, 95 % CI)(, median,
+/// diverged runs).
+fn row_cells(
+    r: &Row,
+    units: &BTreeMap<String, String>,
+    paper: bool,
+    ci: bool,
+    median: bool,
+) -> Vec<String> {
+    let unit = if r.unit.is_empty() {
+        units.get(&r.metric).map_or("", String::as_str)
+    } else {
+        r.unit.as_str()
+    };
     let style = Style::of(r.value, unit);
     let mut cells = vec![
         r.method.clone(),
@@ -116,7 +133,44 @@ fn row_cells(r: &Row, units: &BTreeMap<String, String>, paper: bool, ci: bool) -
             |[lo, hi]| format!("[{}, {}]", style.fmt(lo), style.fmt(hi)),
         ));
     }
+    if median {
+        cells.push(r.median.map_or_else(|| "—".into(), |m| style.fmt(m)));
+        cells.push(match r.divergence {
+            Some(d) if d.runs > 0 => format!("{} (> {})", d.runs, style.fmt(d.threshold)),
+            Some(_) => "0".into(),
+            None => "—".into(),
+        });
+    }
     cells
+}
+
+/// The legend under a results table: how each interval method in it was computed.
+fn interval_legend(rows: &[Row]) -> String {
+    let mut methods: Vec<&str> = rows.iter().filter_map(|r| r.ci_method.as_deref()).collect();
+    methods.sort_unstable();
+    methods.dedup();
+    if methods.is_empty() {
+        return String::new();
+    }
+    let explain = |m: &str| -> &'static str {
+        match m {
+            "bootstrap-bca" => "BCa bootstrap of the mean over runs (non-negative metric)",
+            "student-t" => "Student-t interval of the mean (signed metric, paired difference)",
+            "student-t-cut-at-0" => "Student-t over more than 20,000 runs, lower end cut at 0",
+            "order-statistic" => "order-statistic interval of the median",
+            "clopper-pearson" => "exact binomial interval of a proportion",
+            _ => "see the experiment's notes",
+        }
+    };
+    let parts: Vec<String> = methods
+        .iter()
+        .map(|m| format!("`{m}`: {}", explain(m)))
+        .collect();
+    format!(
+        "Intervals: {}. \"diverged\": runs above the divergence threshold (a factor times \
+         the median). See docs/reading-the-numbers.md.\n",
+        parts.join("; ")
+    )
 }
 
 /// Every row of `rows` as table cells, with the headers, for `setup` and `framing`.
@@ -127,15 +181,16 @@ fn table(
     framing: Framing,
 ) -> (Vec<&'static str>, Vec<Vec<String>>) {
     let (paper, ci) = (framing.paper, with_ci_column(framing, rows));
+    let median = with_median_columns(rows);
     let cells = rows
         .iter()
-        .map(|r| row_cells(r, units, paper, ci))
+        .map(|r| row_cells(r, units, paper, ci, median))
         .collect();
-    (headers(setup, paper, ci), cells)
+    (headers(setup, paper, ci, median), cells)
 }
 
 /// Column headers of the results table for `setup`.
-fn headers(setup: &Setup, paper: bool, ci: bool) -> Vec<&'static str> {
+fn headers(setup: &Setup, paper: bool, ci: bool, median: bool) -> Vec<&'static str> {
     let mut h = vec!["method", "metric", "unit"];
     match (paper, setup.is_paper()) {
         (true, true) => h.extend(["paper", "reproduced"]),
@@ -145,10 +200,20 @@ fn headers(setup: &Setup, paper: bool, ci: bool) -> Vec<&'static str> {
     if ci {
         h.push("95% CI");
     }
+    if median {
+        h.extend(["median", "diverged"]);
+    }
     h
 }
 
 fn verdict(c: &Claim, setup: &Setup, framing: Framing) -> &'static str {
+    // A claim judged by equivalence says which of the three outcomes it is.
+    match c.verdict.as_deref() {
+        Some("agrees") => return "agrees",
+        Some("differs") => return "differs",
+        Some("inconclusive") => return "inconclusive",
+        _ => {}
+    }
     match (c.holds, setup.is_paper() || !framing.paper) {
         (true, true) => "holds",
         (false, true) => "does not hold",
@@ -218,6 +283,11 @@ pub(crate) fn experiment_report(
     });
     let (head, rows) = table(&s.rows, &analysis.units, setup, framing);
     md.push_str(&md_table(&head, &rows));
+    let legend = interval_legend(&s.rows);
+    if !legend.is_empty() {
+        md.push('\n');
+        md.push_str(&legend);
+    }
     md.push_str(match (framing.paper, setup.is_paper()) {
         (false, _) => "\n## Checks\n\n",
         (true, true) => "\n## Claims\n\n",
@@ -391,10 +461,10 @@ mod tests {
         assert_eq!(fmt_value(123.3333, "count/run"), "123.3");
         assert_eq!(fmt_value(0.0, "m"), "0");
         // The interval is written with the value's decimals.
-        let row = Row::new("A", "mean", 0.0756).with_ci95(0.07, 0.081);
+        let row = Row::new("A", "mean", 0.0756).with_ci95(0.07, 0.081, "student-t");
         let units = BTreeMap::from([("mean".to_string(), "m".to_string())]);
         assert_eq!(
-            row_cells(&row, &units, true, true),
+            row_cells(&row, &units, true, true, false),
             ["A", "mean", "m", "—", "0.07560", "[0.07000, 0.08100]"]
         );
         // A job on the user's own data: no paper column, the interval only if a row

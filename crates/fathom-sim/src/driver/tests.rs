@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::*;
 use crate::experiment::{Analysis, Batch, DynExperiment, Environment, Experiment};
-use fathom_report::output::{Claim, Row, read_summary_json};
+use fathom_report::output::{Claim, read_summary_json};
 use fathom_report::plot::{LinePlot, Series};
 
 #[derive(Debug, Clone, Serialize, Deserialize, schemars::JsonSchema)]
@@ -18,6 +18,8 @@ struct DummyScenario {
     experiment: String,
     runs: usize,
     base_seed: u64,
+    #[serde(default)]
+    statistics: crate::statistics::StatisticsParams,
 }
 
 crate::monte_carlo_scenario!(DummyScenario);
@@ -96,11 +98,8 @@ impl<const K: u8> Experiment for Dummy<K> {
     ) -> Result<(), SimError> {
         let draws = &records[0];
         let mean = draws.iter().sum::<f64>() / c.runs as f64;
-        out.row(
-            Row::new("U01", "mean", mean)
-                .with_paper(0.5)
-                .with_ci95(mean - 0.1, mean + 0.1),
-        );
+        out.unit("mean", "1");
+        out.runs_row("U01", "mean", draws)?.paper = Some(0.5);
         out.claim(Claim::new(
             "mean_near_half",
             "mean is near 0.5",

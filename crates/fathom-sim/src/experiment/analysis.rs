@@ -135,6 +135,10 @@ pub struct Analysis {
     pub(crate) files: Vec<OutputFile>,
     pub(crate) skipped: Option<String>,
     pub(crate) units: std::collections::BTreeMap<String, String>,
+    /// Metrics declared signed (their mean's interval is Student-t).
+    pub(crate) signed: std::collections::BTreeSet<String>,
+    /// How rows summarize runs; `None`: the defaults with seed 0 (unit tests).
+    pub(crate) statistics: Option<fathom_stats::SummarySettings>,
 }
 
 impl Analysis {
@@ -155,8 +159,9 @@ impl Analysis {
 
     /// Declares the unit of every row with metric `metric` (`"m"`, `"m/s"`, `"%"`,
     /// `"m²"`; `"count"` for counts, `"count/run"` for a count averaged over runs,
-    /// `"1"` for ratios and fractions). The console and `report.md` tables show it;
-    /// `summary.json` does not carry it (its rows keep the contract's shape).
+    /// `"1"` for ratios and fractions). Every row of `summary.json` carries it
+    /// (`unit`), and the console and `report.md` tables show it; a row whose metric
+    /// has no declared unit is refused.
     pub fn unit(&mut self, metric: impl Into<String>, unit: impl Into<String>) {
         self.units.insert(metric.into(), unit.into());
     }

@@ -32,7 +32,7 @@ pub struct Job<'a> {
 }
 
 /// A checked scenario with the overrides applied.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Resolved {
     /// The scenario as TOML with every default filled in and the overrides applied:
     /// running it reproduces the run.
@@ -41,6 +41,9 @@ pub struct Resolved {
     pub runs: Option<usize>,
     /// The base seed used (`None`: deterministic).
     pub base_seed: Option<u64>,
+    /// How the rows summarize the runs (checked `[statistics]`, seeded from the base
+    /// seed; the defaults for a deterministic job).
+    pub statistics: fathom_stats::SummarySettings,
 }
 
 /// The outcome of [`DynExperiment::execute`].
@@ -55,7 +58,7 @@ pub struct Executed {
 }
 
 /// The resolved scenario and the batches of a prepared experiment.
-#[derive(Debug, Clone, PartialEq, Eq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Plan {
     /// The resolved scenario.
     pub resolved: Resolved,
@@ -402,10 +405,14 @@ fn read_checked<E: Experiment>(
             }
             other => other,
         })?;
+    let statistics = scenario
+        .statistics()
+        .check(scenario.base_seed().unwrap_or(0), file)?;
     let resolved = Resolved {
         toml: to_toml(&scenario, file)?,
         runs: scenario.runs(),
         base_seed: scenario.base_seed(),
+        statistics,
     };
     Ok((scenario, checked, resolved))
 }
@@ -496,8 +503,10 @@ fn finish<E: Experiment>(
     kept: Vec<Vec<E::Kept>>,
     folds: Vec<E::Fold>,
 ) -> Result<Executed, SimError> {
-    let mut analysis = Analysis::new();
+    let mut analysis = Analysis::with_statistics(resolved.statistics);
     exp.analyse(prepared, kept, folds, &mut analysis)?;
+    analysis.fill_units();
+    analysis.check_non_negative_intervals()?;
     let runs = batches.first().map_or(0, |b| b.runs);
     let seed = resolved.base_seed.unwrap_or(0);
     let mut summary = Summary::new(E::NAME, E::SEED_DOC, runs, seed);

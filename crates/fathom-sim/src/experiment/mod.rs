@@ -34,6 +34,7 @@
 
 mod analysis;
 mod dynamic;
+mod rows;
 
 use std::path::PathBuf;
 
@@ -49,6 +50,7 @@ pub use dynamic::{
     Assessed, DynExperiment, Executed, FoundRecord, Job, Plan, RecordSink, RecordSource, Resolved,
     Shard, SingleRunFn, check_overrides,
 };
+pub use rows::{equivalence_claim, row_of_summary};
 
 /// The header keys every scenario file has, read and overridden by the driver.
 pub trait ScenarioFile: Serialize + DeserializeOwned + schemars::JsonSchema + Send + Sync {
@@ -64,10 +66,16 @@ pub trait ScenarioFile: Serialize + DeserializeOwned + schemars::JsonSchema + Se
     /// Replaces `base_seed` (`--seed`); a deterministic experiment ignores it (the
     /// driver refuses `--seed` for it before calling this).
     fn set_base_seed(&mut self, seed: u64);
+    /// The `[statistics]` settings (how rows summarize the runs); the defaults for a
+    /// deterministic job.
+    fn statistics(&self) -> crate::statistics::StatisticsParams {
+        crate::statistics::StatisticsParams::default()
+    }
 }
 
 /// Implements [`ScenarioFile`] for a scenario struct with the fields
-/// `experiment: String`, `runs: usize` and `base_seed: u64`.
+/// `experiment: String`, `runs: usize`, `base_seed: u64` and
+/// `statistics: StatisticsParams`.
 #[macro_export]
 macro_rules! monte_carlo_scenario {
     ($ty:ty) => {
@@ -86,6 +94,9 @@ macro_rules! monte_carlo_scenario {
             }
             fn set_base_seed(&mut self, seed: u64) {
                 self.base_seed = seed;
+            }
+            fn statistics(&self) -> $crate::statistics::StatisticsParams {
+                self.statistics.clone()
             }
         }
     };
