@@ -289,7 +289,10 @@ fn ablation_text(prep: &Prepared, rows: &[Row]) -> String {
         let d = find(rows, &format!("{base}-vs-main"), "diff_rmse_3d");
         let what = match a.label().as_str() {
             "gaussian_ranges" => {
-                "glass treated as opaque (Gaussian range noise only, the paper's simulation)"
+                "Gaussian range noise only (glass like opaque, every incidence returns: the paper's simulation)"
+            }
+            "glass_incidence" => {
+                "glass extra noise and detection falling with the incidence angle (the main batch: Gaussian ranges)"
             }
             "control_on_estimate" => "the controller flying on the estimate",
             "posterior_information" => {
