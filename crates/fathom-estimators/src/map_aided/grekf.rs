@@ -415,4 +415,57 @@ mod tests {
         assert_eq!((rep.used, rep.gated), (0, 1));
         assert_eq!(f2, before);
     }
+
+    /// Issue 33: an update with every beam gated is no map update; after
+    /// `lock_loss_updates` of them the lock is lost (counted once), the covariance
+    /// inflated, and the first update that uses a beam again re-locks. The iterated
+    /// update converges in fewer steps than it may take.
+    #[test]
+    fn lost_lock_inflates_and_relocks() {
+        use crate::map_aided::params::GrekfParams;
+        let map = Planes::corridor(5.0);
+        let est = nominal(Vector3::new(0.0, 0.0, -2.0), 0.0);
+        let settings = GrekfParams {
+            iterations: 4,
+            lock_loss_updates: 2,
+            relock_inflation: 4.0,
+            ..GrekfParams::default()
+        }
+        .check()
+        .unwrap();
+        let mut g = Grekf::new(settings);
+        let mut f = filter(3.0);
+        let p_east = f.covariance()[(1, 1)];
+        let outlier = [RangeBeam {
+            dir_in_body: Vector3::y(),
+            range_m: 15.0,
+            sigma_m: 0.05,
+        }];
+        let first = g.update(&mut f, &est, &outlier, None, &map).unwrap();
+        assert!(first.all_beams_left_out && !first.lock_lost && !first.inflated);
+        assert_eq!(f.covariance()[(1, 1)], p_east);
+        let second = g.update(&mut f, &est, &outlier, None, &map).unwrap();
+        assert!(second.lock_lost && second.inflated && g.lock_lost());
+        assert!((f.covariance()[(1, 1)] - 4.0 * p_east).abs() < 1e-12);
+        // still lost: inflated again after another run, not counted again
+        g.update(&mut f, &est, &outlier, None, &map).unwrap();
+        let fourth = g.update(&mut f, &est, &outlier, None, &map).unwrap();
+        assert!(fourth.inflated && !fourth.lock_lost);
+        let good = [RangeBeam {
+            range_m: 5.2,
+            ..outlier[0]
+        }];
+        let back = g.update(&mut f, &est, &good, None, &map).unwrap();
+        assert!(back.relocked && !back.all_beams_left_out && !g.lock_lost());
+        assert!(back.iterations >= 1 && back.iterations <= 4);
+        assert_eq!(back.rays_cast, back.iterations);
+        // the paper's update (a RangeSettings alone) never inflates
+        let mut plain = Grekf::new(RangeParams::default().check().unwrap());
+        let mut f2 = filter(3.0);
+        for _ in 0..10 {
+            let r = plain.update(&mut f2, &est, &outlier, None, &map).unwrap();
+            assert!(!r.inflated);
+        }
+        assert_eq!(f2.covariance()[(1, 1)], p_east);
+    }
 }

@@ -106,6 +106,12 @@ pub(super) fn analyse(
             let v: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k]).collect();
             out.row(mean_row(&base, metric, &v)?);
         }
+        let k3 = metric_index("rmse_3d").unwrap_or(0);
+        let rmse: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k3]).collect();
+        let beyond = rmse.iter().filter(|v| **v > BEYOND_M).count();
+        out.row(Row::new(&base, "runs_beyond_1m", beyond as f64));
+        let worst = rmse.iter().copied().fold(0.0, f64::max);
+        out.row(Row::new(&base, "worst_rmse_3d", worst));
         for metric in ["rmse_h", "rmse_3d", "rmse_yaw"] {
             let k = metric_index(metric).unwrap_or(0);
             let v: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k]).collect();

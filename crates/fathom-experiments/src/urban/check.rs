@@ -187,6 +187,8 @@ pub struct Checked {
     pub ablations: Vec<Ablation>,
     /// The settings the paper does not give, `(scenario key, value)`, for the report.
     pub unstated: Vec<(String, String)>,
+    /// Shortest time in a mode, s (for the report).
+    pub switch_dwell_s: f64,
 }
 
 impl Checked {
@@ -889,6 +891,7 @@ impl UrbanScenario {
             ablation_runs: a.runs.min(self.runs),
             ablations,
             unstated: self.unstated(),
+            switch_dwell_s: self.switch.min_dwell_s,
         })
     }
 }
