@@ -86,22 +86,34 @@ fn preset_rows_claims_figures_and_report() {
         assert_eq!(used["value"].as_f64(), Some(9.0), "{used}");
         for m in METHODS {
             let name = format!("{scene}/{m}");
-            let beyond = row(rows, &name, "runs_beyond_1m")["value"].as_f64().unwrap();
+            let beyond = row(rows, &name, "runs_beyond_1m")["value"]
+                .as_f64()
+                .unwrap();
             assert!((0.0..=2.0).contains(&beyond), "{name}: {beyond}");
             if matches!(m, "GREKF" | "MGPMF" | "PF") {
                 row(rows, &name, "switches");
                 let fewest = row(rows, &name, "switches_min")["value"].as_f64().unwrap();
                 assert!(fewest >= 2.0, "{name} switched {fewest} times in a run");
-                let map_s = row(rows, &name, "time_map_aided_s")["value"].as_f64().unwrap();
-                let gps_s = row(rows, &name, "time_gps_ins_s")["value"].as_f64().unwrap();
-                assert!(map_s > 10.0 && gps_s > 10.0, "{name}: {map_s} s / {gps_s} s");
+                let map_s = row(rows, &name, "time_map_aided_s")["value"]
+                    .as_f64()
+                    .unwrap();
+                let gps_s = row(rows, &name, "time_gps_ins_s")["value"]
+                    .as_f64()
+                    .unwrap();
+                assert!(
+                    map_s > 10.0 && gps_s > 10.0,
+                    "{name}: {map_s} s / {gps_s} s"
+                );
             }
         }
     }
     let per_run = read(&out, "per_run.csv");
     let header = per_run.lines().next().unwrap();
     for col in ["switches", "lost_lock", "relocks", "map_left_out"] {
-        assert!(header.split(',').any(|h| h == col), "per_run.csv lacks {col}");
+        assert!(
+            header.split(',').any(|h| h == col),
+            "per_run.csv lacks {col}"
+        );
     }
     let claims: Vec<&str> = summary["claims"]
         .as_array()
