@@ -7,17 +7,38 @@
 //! beyond the largest incidence angle (the row grows without bound at grazing), or
 //! failing the per-beam chi-square gate are left out and counted; the rest and the
 //! baro make one stacked update (eq. 13-14, faer for the dynamic size, Joseph form).
+//!
+//! Beyond the paper ([`GrekfSettings`], [`GrekfParams`](super::GrekfParams)):
+//!
+//! - **Gate**: each beam's NIS is taken against its predicted innovation variance
+//!   `S = h P h^T + (k sigma)^2`, `P` the predicted covariance and `k` the σ
+//!   inflation the update itself uses (the gate and the update agree on `S`).
+//! - **Iterated update** (Gauss-Newton, the iterated EKF): with `iterations > 1` the
+//!   rays are cast again from the pose the update gives, each beam relinearized there
+//!   (`nu_i = z - h(x_i) + H_i (dx_i - dx_prior)`) and the update redone from the
+//!   prior, until the correction stops moving (1e-6) or the iterations end; the last
+//!   linearization gives the posterior covariance.
+//! - **σ inflation**: every beam's σ times `k >= 1`, for the errors the beams share
+//!   (one facet seen by many beams, the faceted map against a smooth sensor model, the
+//!   attitude), which a stacked update of independent beams would otherwise count as
+//!   many independent measurements.
+//! - **Lost lock**: an update in which beams were given and every one was left out
+//!   uses no beam (the baro alone may still update the height); after
+//!   `lock_loss_updates` such updates in a row the filter has lost lock
+//!   ([`GrekfReport::lock_lost`]), and the position, velocity and attitude covariance
+//!   is multiplied by `relock_inflation` (the gate widens), again after every further
+//!   run of as many, until an update uses a beam again ([`GrekfReport::relocked`]).
 
 use fathom_core::{Ray, RayCaster, RayHit};
-use nalgebra::{DMatrix, DVector, Vector3};
+use nalgebra::{DMatrix, DVector, RowSVector, Vector3};
 
-use super::N_STATES;
 use super::error::MapAidedError;
 use super::ins12::{Ins12Filter, NominalNav};
-use super::params::RangeSettings;
+use super::params::GrekfSettings;
 use super::range_model::{BaroHeight, BeamGeometry, RangeBeam, baro_row12, check_update_inputs};
+use super::{ErrorVector12, N_STATES};
 
-/// What one GREKF update did.
+/// What one GREKF update did (the counts of the last iteration).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct GrekfReport {
     /// Beams given.
@@ -34,43 +55,148 @@ pub struct GrekfReport {
     pub baro_used: bool,
     /// NIS of the stacked update (0 when nothing was used).
     pub nis: f64,
-    /// Rays cast.
+    /// Rays cast (all iterations).
     pub rays_cast: usize,
+    /// Iterations done.
+    pub iterations: usize,
+    /// Beams were given and none was used (the update is not a map update).
+    pub all_beams_left_out: bool,
+    /// This update lost the lock (module docs).
+    pub lock_lost: bool,
+    /// The covariance was inflated by the lost-lock rule in this update.
+    pub inflated: bool,
+    /// This update used beams again after a lost lock.
+    pub relocked: bool,
 }
 
-/// The GREKF update (module docs), with its buffers reused across updates.
+/// One row of the stacked update: `(h, nu, r)`.
+type Row = (RowSVector<f64, N_STATES>, f64, f64);
+
+/// The GREKF update (module docs), with its buffers and lock state kept across
+/// updates.
 #[derive(Debug, Clone)]
 pub struct Grekf {
-    settings: RangeSettings,
+    settings: GrekfSettings,
     dirs: Vec<Vector3<f64>>,
     rays: Vec<Ray>,
     hits: Vec<Option<RayHit>>,
+    rows: Vec<Row>,
+    /// Consecutive updates without a used beam.
+    left_out_run: usize,
+    /// Whether the lock is lost (until a beam is used again).
+    lost: bool,
 }
 
 impl Grekf {
-    /// A GREKF update with checked settings.
-    pub fn new(settings: RangeSettings) -> Self {
+    /// A GREKF update with checked settings (a [`super::RangeSettings`] alone gives
+    /// the paper's update: one iteration, nominal σ, no lost-lock rule).
+    pub fn new(settings: impl Into<GrekfSettings>) -> Self {
         Self {
-            settings,
+            settings: settings.into(),
             dirs: Vec::new(),
             rays: Vec::new(),
             hits: Vec::new(),
+            rows: Vec::new(),
+            left_out_run: 0,
+            lost: false,
         }
     }
 
     /// The settings.
-    pub fn settings(&self) -> &RangeSettings {
+    pub fn settings(&self) -> &GrekfSettings {
         &self.settings
     }
 
+    /// Whether the lock is lost (module docs).
+    pub fn lock_lost(&self) -> bool {
+        self.lost
+    }
+
+    /// Forgets the lock state (a new map-aided stretch starts locked).
+    pub fn reset(&mut self) {
+        self.left_out_run = 0;
+        self.lost = false;
+    }
+
+    /// The rows seen from `est` (the pose of `dx_i`), relinearized around the prior
+    /// error mean `dx0` (module docs), into `self.rows`; counts into `report`.
+    #[allow(clippy::too_many_arguments)]
+    fn rows_at(
+        &mut self,
+        est: &NominalNav,
+        dx_i: &ErrorVector12,
+        dx0: &ErrorVector12,
+        p: &nalgebra::SMatrix<f64, N_STATES, N_STATES>,
+        beams: &[RangeBeam],
+        baro: Option<&BaroHeight>,
+        caster: &dyn RayCaster,
+        report: &mut GrekfReport,
+    ) {
+        let range = &self.settings.range;
+        let c = est.nav_from_body.to_rotation_matrix().into_inner();
+        self.rays.clear();
+        self.rays.extend(
+            self.dirs
+                .iter()
+                .map(|d| Ray::new(est.pos_in_nav, c * d, range.max_range)),
+        );
+        self.hits.clear();
+        self.hits.resize(self.rays.len(), None);
+        // lengths equal by construction
+        let _ = caster.cast_batch(&self.rays, &mut self.hits);
+        report.rays_cast += beams.len();
+        report.no_hit = 0;
+        report.grazing = 0;
+        report.gated = 0;
+        report.baro_used = false;
+        self.rows.clear();
+        let shift = dx_i - dx0;
+        let k2 = self.settings.sigma_inflation.powi(2);
+        for ((beam, ray), hit) in beams.iter().zip(&self.rays).zip(&self.hits) {
+            let Some(hit) = hit else {
+                report.no_hit += 1;
+                continue;
+            };
+            let geom = BeamGeometry::from_hit(hit, ray.dir_in_nav);
+            if geom.cos_incidence() < range.min_cos_incidence {
+                report.grazing += 1;
+                continue;
+            }
+            let h = geom.row12();
+            let r = k2 * beam.sigma_m * beam.sigma_m;
+            let nu = beam.range_m - geom.range + (h * shift)[0];
+            let s = (h * p * h.transpose())[0] + r;
+            // a NaN NIS fails the gate
+            if nu * nu / s <= range.gate {
+                self.rows.push((h, nu, r));
+            } else {
+                report.gated += 1;
+            }
+        }
+        report.used = self.rows.len();
+        if let Some(b) = baro {
+            let h = baro_row12();
+            let r = b.sigma_m * b.sigma_m;
+            let nu = b.height_m - (-est.pos_in_nav.z) + (h * shift)[0];
+            let s = (h * p * h.transpose())[0] + r;
+            if nu * nu / s <= range.gate {
+                self.rows.push((h, nu, r));
+                report.baro_used = true;
+            } else {
+                report.gated += 1;
+            }
+        }
+    }
+
     /// Updates `filter` at its current time with the beams and the optional baro,
-    /// seen from `nominal` corrected by the filter's error mean.
+    /// seen from `nominal` corrected by the filter's error mean (module docs).
     ///
     /// # Errors
     /// [`MapAidedError::InvalidInput`] for a bad beam, baro or nominal state (NaN
     /// range, variance `<= 0`, zero direction); [`MapAidedError::PoseOutsideMap`] when
-    /// beams were given and none has a predicted hit; [`MapAidedError::Filter`] from the
-    /// stacked update. All with the filter time; the filter is unchanged on error.
+    /// beams were given and none has a predicted hit from the prior pose;
+    /// [`MapAidedError::Filter`] from the stacked update or the lost-lock inflation.
+    /// All with the filter time; the filter and the lock state are unchanged on error.
     pub fn update(
         &mut self,
         filter: &mut Ins12Filter,
@@ -81,80 +207,85 @@ impl Grekf {
     ) -> Result<GrekfReport, MapAidedError> {
         let t = filter.time();
         check_update_inputs(nominal, beams, baro, t, &mut self.dirs)?;
-        let est = nominal.corrected(filter.error_mean());
-        let c = est.nav_from_body.to_rotation_matrix().into_inner();
-        self.rays.clear();
-        self.rays.extend(
-            self.dirs
-                .iter()
-                .map(|d| Ray::new(est.pos_in_nav, c * d, self.settings.max_range)),
-        );
-        self.hits.clear();
-        self.hits.resize(self.rays.len(), None);
-        // lengths equal by construction
-        let _ = caster.cast_batch(&self.rays, &mut self.hits);
-
-        let p = filter.covariance();
+        let dx0 = *filter.error_mean();
+        let p = *filter.covariance();
         let mut report = GrekfReport {
             beams: beams.len(),
-            rays_cast: beams.len(),
             ..GrekfReport::default()
         };
-        let mut rows: Vec<(nalgebra::RowSVector<f64, N_STATES>, f64, f64)> =
-            Vec::with_capacity(beams.len() + 1);
-        for ((beam, ray), hit) in beams.iter().zip(&self.rays).zip(&self.hits) {
-            let Some(hit) = hit else {
-                report.no_hit += 1;
-                continue;
-            };
-            let geom = BeamGeometry::from_hit(hit, ray.dir_in_nav);
-            if geom.cos_incidence() < self.settings.min_cos_incidence {
-                report.grazing += 1;
-                continue;
+        let mut dx_i = dx0;
+        // the last iteration that used rows: its filter and counts
+        let mut post: Option<(Ins12Filter, GrekfReport)> = None;
+        for it in 0..self.settings.iterations {
+            let est = nominal.corrected(&dx_i);
+            self.rows_at(&est, &dx_i, &dx0, &p, beams, baro, caster, &mut report);
+            if it == 0 && !beams.is_empty() && report.no_hit == beams.len() {
+                return Err(MapAidedError::PoseOutsideMap {
+                    rays: beams.len(),
+                    time: t,
+                });
             }
-            let h = geom.row12();
-            let r = beam.sigma_m * beam.sigma_m;
-            let nu = beam.range_m - geom.range;
-            let s = (h * p * h.transpose())[0] + r;
-            // a NaN NIS fails the gate
-            if nu * nu / s <= self.settings.gate {
-                rows.push((h, nu, r));
-            } else {
-                report.gated += 1;
+            report.iterations = it + 1;
+            if self.rows.is_empty() {
+                break;
             }
-        }
-        if !beams.is_empty() && report.no_hit == beams.len() {
-            return Err(MapAidedError::PoseOutsideMap {
-                rays: beams.len(),
-                time: t,
-            });
-        }
-        report.used = rows.len();
-        if let Some(b) = baro {
-            let h = baro_row12();
-            let r = b.sigma_m * b.sigma_m;
-            let nu = b.height_m - (-est.pos_in_nav.z);
-            let s = (h * p * h.transpose())[0] + r;
-            if nu * nu / s <= self.settings.gate {
-                rows.push((h, nu, r));
-                report.baro_used = true;
-            } else {
-                report.gated += 1;
+            let rows = &self.rows;
+            let m = rows.len();
+            let h = DMatrix::from_fn(m, N_STATES, |i, j| rows[i].0[j]);
+            let nu = DVector::from_fn(m, |i, _| rows[i].1);
+            let r = DMatrix::from_fn(m, m, |i, j| if i == j { rows[i].2 } else { 0.0 });
+            let mut f = filter.clone();
+            let info = f.kf_mut().update_stacked_with_innovation(&nu, &h, &r)?;
+            report.nis = info.nis;
+            let next = *f.error_mean();
+            post = Some((f, report));
+            if (next - dx_i).norm() < 1e-6 {
+                break;
             }
+            dx_i = next;
         }
-        if rows.is_empty() {
+        let (mut f, used_report) = match post {
+            Some((f, r)) => (f, r),
+            None => (filter.clone(), report),
+        };
+        let rays_cast = report.rays_cast;
+        let iterations = report.iterations;
+        let mut report = GrekfReport {
+            rays_cast,
+            iterations,
+            ..used_report
+        };
+        if post_used_beams(&report, beams) {
+            report.relocked = self.lost;
+            self.lost = false;
+            self.left_out_run = 0;
+            *filter = f;
             return Ok(report);
         }
-        let m = rows.len();
-        let h = DMatrix::from_fn(m, N_STATES, |i, j| rows[i].0[j]);
-        let nu = DVector::from_fn(m, |i, _| rows[i].1);
-        let r = DMatrix::from_fn(m, m, |i, j| if i == j { rows[i].2 } else { 0.0 });
-        let info = filter
-            .kf_mut()
-            .update_stacked_with_innovation(&nu, &h, &r)?;
-        report.nis = info.nis;
+        report.all_beams_left_out = !beams.is_empty();
+        if beams.is_empty() {
+            *filter = f;
+            return Ok(report);
+        }
+        let n = self.settings.lock_loss_updates;
+        let run = self.left_out_run + 1;
+        if n > 0 && run >= n {
+            f.inflate_navigation_covariance(self.settings.relock_inflation)?;
+            report.inflated = true;
+            report.lock_lost = !self.lost;
+            self.lost = true;
+            self.left_out_run = 0;
+        } else {
+            self.left_out_run = run;
+        }
+        *filter = f;
         Ok(report)
     }
+}
+
+/// Whether the update used at least one beam.
+fn post_used_beams(report: &GrekfReport, beams: &[RangeBeam]) -> bool {
+    !beams.is_empty() && report.used > 0
 }
 
 #[cfg(test)]
@@ -283,5 +414,58 @@ mod tests {
         let rep = g.update(&mut f2, &est, &[outlier], None, &map).unwrap();
         assert_eq!((rep.used, rep.gated), (0, 1));
         assert_eq!(f2, before);
+    }
+
+    /// Issue 33: an update with every beam gated is no map update; after
+    /// `lock_loss_updates` of them the lock is lost (counted once), the covariance
+    /// inflated, and the first update that uses a beam again re-locks. The iterated
+    /// update converges in fewer steps than it may take.
+    #[test]
+    fn lost_lock_inflates_and_relocks() {
+        use crate::map_aided::params::GrekfParams;
+        let map = Planes::corridor(5.0);
+        let est = nominal(Vector3::new(0.0, 0.0, -2.0), 0.0);
+        let settings = GrekfParams {
+            iterations: 4,
+            lock_loss_updates: 2,
+            relock_inflation: 4.0,
+            ..GrekfParams::default()
+        }
+        .check()
+        .unwrap();
+        let mut g = Grekf::new(settings);
+        let mut f = filter(3.0);
+        let p_east = f.covariance()[(1, 1)];
+        let outlier = [RangeBeam {
+            dir_in_body: Vector3::y(),
+            range_m: 15.0,
+            sigma_m: 0.05,
+        }];
+        let first = g.update(&mut f, &est, &outlier, None, &map).unwrap();
+        assert!(first.all_beams_left_out && !first.lock_lost && !first.inflated);
+        assert_eq!(f.covariance()[(1, 1)], p_east);
+        let second = g.update(&mut f, &est, &outlier, None, &map).unwrap();
+        assert!(second.lock_lost && second.inflated && g.lock_lost());
+        assert!((f.covariance()[(1, 1)] - 4.0 * p_east).abs() < 1e-12);
+        // still lost: inflated again after another run, not counted again
+        g.update(&mut f, &est, &outlier, None, &map).unwrap();
+        let fourth = g.update(&mut f, &est, &outlier, None, &map).unwrap();
+        assert!(fourth.inflated && !fourth.lock_lost);
+        let good = [RangeBeam {
+            range_m: 5.2,
+            ..outlier[0]
+        }];
+        let back = g.update(&mut f, &est, &good, None, &map).unwrap();
+        assert!(back.relocked && !back.all_beams_left_out && !g.lock_lost());
+        assert!(back.iterations >= 1 && back.iterations <= 4);
+        assert_eq!(back.rays_cast, back.iterations);
+        // the paper's update (a RangeSettings alone) never inflates
+        let mut plain = Grekf::new(RangeParams::default().check().unwrap());
+        let mut f2 = filter(3.0);
+        for _ in 0..10 {
+            let r = plain.update(&mut f2, &est, &outlier, None, &map).unwrap();
+            assert!(!r.inflated);
+        }
+        assert_eq!(f2.covariance()[(1, 1)], p_east);
     }
 }

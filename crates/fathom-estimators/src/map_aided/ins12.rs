@@ -222,6 +222,27 @@ impl Ins12Filter {
         &self.noise
     }
 
+    /// Multiplies the covariance of the position, velocity and attitude errors by
+    /// `factor` (rows and columns scaled by `sqrt(factor)`: their correlations with
+    /// each other and with the bias are kept): a filter that has lost lock widens its
+    /// gate.
+    ///
+    /// # Errors
+    /// [`MapAidedError::InvalidInput`] for a `factor` not finite and > 0; as
+    /// [`KalmanFilter::set_estimate`] for an overflow. The filter is unchanged on error.
+    pub fn inflate_navigation_covariance(&mut self, factor: f64) -> Result<(), MapAidedError> {
+        super::error::positive_input("covariance inflation", 0, factor, self.kf.time())?;
+        let k = factor.sqrt();
+        let mut d = ErrorVector12::repeat(1.0);
+        for i in 0..ACCEL_BIAS {
+            d[i] = k;
+        }
+        let p = Matrix12::from_fn(|i, j| self.kf.covariance()[(i, j)] * d[i] * d[j]);
+        self.kf
+            .set_estimate(Gaussian::new_unchecked(*self.kf.state(), p))?;
+        Ok(())
+    }
+
     /// The underlying Kalman filter, mutable (for the updates of this module; each
     /// keeps the no-change-on-error rule).
     pub(crate) fn kf_mut(&mut self) -> &mut KalmanFilter<N_STATES> {

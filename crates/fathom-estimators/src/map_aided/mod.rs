@@ -74,8 +74,9 @@ pub use grekf::{Grekf, GrekfReport};
 pub use ins12::{Correction, Ins12Filter, NominalNav};
 pub use mgpmf::{Mgpmf, MgpmfReport};
 pub use params::{
-    GpsAiding, GpsParams, GridPosterior, ImuNoise, Ins12Params, MgpmfParams, MgpmfSettings,
-    ParticleParams, ParticleSettings, RangeParams, RangeSettings, SwitchParams, SwitchSettings,
+    GpsAiding, GpsParams, GrekfParams, GrekfSettings, GridPosterior, ImuNoise, Ins12Params,
+    MgpmfParams, MgpmfSettings, ParticleParams, ParticleSettings, RangeParams, RangeSettings,
+    SwitchParams, SwitchSettings,
 };
 pub use particle::{ParticleFilter, ParticleReport};
 pub use range_model::{BaroHeight, BeamGeometry, RangeBeam};

@@ -241,6 +241,123 @@ impl RangeParams {
     }
 }
 
+/// The GREKF's robustness beyond the paper's single stacked update: an iterated
+/// update (Gauss-Newton on the ray casts), an inflation of the range noise for the
+/// errors the beams share (the map, the attitude, one pier seen by many beams), and
+/// the lost-lock rule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GrekfParams {
+    /// Ray casting, incidence limit and per-beam gate.
+    pub range: RangeParams,
+    /// Iterations of the iterated EKF: the rays are cast again from the updated pose
+    /// and the update relinearized there (1: the paper's single update). Default 1.
+    pub iterations: usize,
+    /// Factor on every beam's range σ in the update and in the gate (1: the beams
+    /// independent at their nominal σ). Default 1.
+    pub sigma_inflation: f64,
+    /// Consecutive updates in which every beam was gated after which the filter has
+    /// lost lock: the position, velocity and attitude covariance is multiplied by
+    /// `relock_inflation` (widening the gate), again after every further run of as
+    /// many, until an update uses beams again (re-lock). 0: never. Default 5.
+    pub lock_loss_updates: usize,
+    /// The covariance factor of a lost lock (> 1). Default 4.
+    pub relock_inflation: f64,
+}
+
+impl Default for GrekfParams {
+    fn default() -> Self {
+        Self {
+            range: RangeParams::default(),
+            iterations: 1,
+            sigma_inflation: 1.0,
+            lock_loss_updates: 5,
+            relock_inflation: 4.0,
+        }
+    }
+}
+
+/// Checked [`GrekfParams`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GrekfSettings {
+    pub(crate) range: RangeSettings,
+    pub(crate) iterations: usize,
+    pub(crate) sigma_inflation: f64,
+    pub(crate) lock_loss_updates: usize,
+    pub(crate) relock_inflation: f64,
+}
+
+impl GrekfSettings {
+    /// The range settings.
+    pub fn range(&self) -> &RangeSettings {
+        &self.range
+    }
+
+    /// Iterations of the iterated update.
+    pub fn iterations(&self) -> usize {
+        self.iterations
+    }
+
+    /// The range σ factor.
+    pub fn sigma_inflation(&self) -> f64 {
+        self.sigma_inflation
+    }
+
+    /// Fully gated updates before a lost lock (0: never).
+    pub fn lock_loss_updates(&self) -> usize {
+        self.lock_loss_updates
+    }
+
+    /// The covariance factor of a lost lock.
+    pub fn relock_inflation(&self) -> f64 {
+        self.relock_inflation
+    }
+}
+
+impl From<RangeSettings> for GrekfSettings {
+    /// The paper's GREKF: one update, nominal σ, no lost-lock rule.
+    fn from(range: RangeSettings) -> Self {
+        Self {
+            range,
+            iterations: 1,
+            sigma_inflation: 1.0,
+            lock_loss_updates: 0,
+            relock_inflation: 4.0,
+        }
+    }
+}
+
+impl GrekfParams {
+    /// Checks the settings: iterations 1 ... 20, σ factor ≥ 1 and finite, lost-lock
+    /// inflation > 1 and finite, the range settings (prefix `grekf.range`).
+    ///
+    /// # Errors
+    /// [`MapAidedError::InvalidParameter`] naming the field.
+    pub fn check(&self) -> Result<GrekfSettings, MapAidedError> {
+        if !(1..=20).contains(&self.iterations) {
+            return Err(invalid(
+                "grekf.iterations",
+                self.iterations as f64,
+                "1 ... 20",
+            ));
+        }
+        let k = self.sigma_inflation;
+        if !(k.is_finite() && k >= 1.0) {
+            return Err(invalid("grekf.sigma_inflation", k, "finite and >= 1"));
+        }
+        let f = self.relock_inflation;
+        if !(f.is_finite() && f > 1.0) {
+            return Err(invalid("grekf.relock_inflation", f, "finite and > 1"));
+        }
+        Ok(GrekfSettings {
+            range: self.range.check_as("grekf.range")?,
+            iterations: self.iterations,
+            sigma_inflation: k,
+            lock_loss_updates: self.lock_loss_updates,
+            relock_inflation: f,
+        })
+    }
+}
+
 /// The robust range likelihood of the grid / particle weights:
 /// `(1 - eps) N(r - r_hat; 0, s^2) + eps / max_range`, the second term for returns the
 /// map does not explain (glass, clutter, people).

@@ -9,7 +9,7 @@ use super::paper::paper_value;
 use super::record::{BatchFold, KeptRun};
 use super::trace::MethodStats;
 use super::world::Prepared;
-use fathom_report::output::CsvCell;
+use fathom_report::output::{CsvCell, Row};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Analysis;
 
@@ -61,6 +61,13 @@ fn declare_units(out: &mut Analysis) {
         ("los_satellites_mean", "1"),
         ("shadowed_fraction", "1"),
         ("flight_duration_s", "s"),
+        ("satellites_used", "count"),
+        ("runs_beyond_1m", "count"),
+        ("worst_rmse_3d", "m"),
+        ("switches", "count/run"),
+        ("switches_min", "count"),
+        ("lost_lock", "count/run"),
+        ("time_gps_ins_s", "s"),
     ] {
         out.unit(metric, unit);
     }
@@ -100,7 +107,13 @@ pub(super) fn analyse(
                 &values(main, s, ib, k),
             )?;
         }
+        switching_rows(c, main, s, out)?;
         let g = format!("{}/GNSS", spec.name);
+        out.row(Row::new(
+            &g,
+            "satellites_used",
+            prep.receiver.orbits().len() as f64,
+        ));
         let per = |f: fn(&super::record::KeptScene) -> f64| -> Vec<f64> {
             main.iter().map(|r| f(&r[s])).collect()
         };
@@ -125,6 +138,12 @@ pub(super) fn analyse(
             let v: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k]).collect();
             out.runs_row(&base, metric, &v)?;
         }
+        let k3 = metric_index("rmse_3d").unwrap_or(0);
+        let rmse: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k3]).collect();
+        let beyond = rmse.iter().filter(|v| **v > BEYOND_M).count();
+        out.row(Row::new(&base, "runs_beyond_1m", beyond as f64));
+        let worst = rmse.iter().copied().fold(0.0, f64::max);
+        out.row(Row::new(&base, "worst_rmse_3d", worst));
         for metric in ["rmse_h", "rmse_3d", "rmse_yaw"] {
             let k = metric_index(metric).unwrap_or(0);
             let v: Vec<f64> = runs.iter().map(|r| r[0].stats[0].values()[k]).collect();
@@ -139,6 +158,51 @@ pub(super) fn analyse(
         }
     }
     per_run_csv(c, main, out)
+}
+
+/// A 3-D RMSE above this counts a run in `runs_beyond_1m`, m.
+pub(super) const BEYOND_M: f64 = 1.0;
+
+/// The per-scenario switching and divergence rows of every method: `switches` (mean
+/// per run, 95 % CI) and `switches_min` (fewest in any run) and `lost_lock` (mean) of
+/// the switching methods, `time_gps_ins_s` (mean), and `runs_beyond_1m` (runs whose
+/// rmse_3d exceeds 1 m) of every method.
+fn switching_rows(
+    c: &Checked,
+    main: &[KeptRun],
+    s: usize,
+    out: &mut Analysis,
+) -> Result<(), SimError> {
+    let spec = &c.scenes[s];
+    let k3 = metric_index("rmse_3d").unwrap_or(0);
+    let km = metric_index("time_map_aided_s").unwrap_or(0);
+    for (m, method) in c.methods.iter().enumerate() {
+        let name = method_row(&spec.name, *method);
+        let beyond = values(main, s, m, k3)
+            .iter()
+            .filter(|v| **v > BEYOND_M)
+            .count();
+        out.row(Row::new(&name, "runs_beyond_1m", beyond as f64));
+        if !method.is_switching() {
+            continue;
+        }
+        let counts: Vec<_> = main.iter().map(|r| r[s].counts[m]).collect();
+        let switches: Vec<f64> = counts.iter().map(|n| n.switches as f64).collect();
+        out.runs_row(&name, "switches", &switches)?;
+        let fewest = switches.iter().copied().fold(f64::INFINITY, f64::min);
+        out.row(Row::new(&name, "switches_min", fewest));
+        let lost: Vec<f64> = counts.iter().map(|n| n.lost_lock as f64).collect();
+        out.runs_row(&name, "lost_lock", &lost)?;
+        let gps: Vec<f64> = main
+            .iter()
+            .map(|r| {
+                let nav_s = (r[s].duration_s - c.rest_s).max(0.0);
+                (nav_s - r[s].stats[m].values()[km]).max(0.0)
+            })
+            .collect();
+        out.runs_row(&name, "time_gps_ins_s", &gps)?;
+    }
+    Ok(())
 }
 
 /// `per_run.csv`: every run's statistics per scenario and method.
@@ -158,7 +222,15 @@ fn per_run_csv(c: &Checked, main: &[KeptRun], out: &mut Analysis) -> Result<(), 
         "nees_mean",
     ];
     headers.extend(units);
-    headers.extend(["gps_updates", "map_updates", "map_failed"]);
+    headers.extend([
+        "gps_updates",
+        "map_updates",
+        "map_failed",
+        "map_left_out",
+        "switches",
+        "lost_lock",
+        "relocks",
+    ]);
     let mut records = Vec::new();
     for (i, run) in main.iter().enumerate() {
         for (s, spec) in c.scenes.iter().enumerate() {
@@ -171,7 +243,16 @@ fn per_run_csv(c: &Checked, main: &[KeptRun], out: &mut Analysis) -> Result<(), 
                 rec.extend(run[s].stats[m].values().iter().map(|v| CsvCell::Num(*v)));
                 let n = run[s].counts[m];
                 rec.extend(
-                    [n.gps_updates, n.map_updates, n.map_failed].map(|x| CsvCell::Int(x as i64)),
+                    [
+                        n.gps_updates,
+                        n.map_updates,
+                        n.map_failed,
+                        n.map_left_out,
+                        n.switches,
+                        n.lost_lock,
+                        n.relocks,
+                    ]
+                    .map(|x| CsvCell::Int(x as i64)),
                 );
                 records.push(rec);
             }

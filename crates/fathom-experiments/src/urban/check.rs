@@ -5,9 +5,9 @@ use fathom_core::units::{
     deg_per_sqrt_hour_to_rad_per_sqrt_s, deg_to_rad, milli_g_to_mps2, per_sqrt_hour_to_per_sqrt_s,
 };
 use fathom_estimators::map_aided::{
-    GpsAiding, GpsParams, GridPosterior, ImuNoise, Ins12Filter, Ins12Params, Matrix12, MgpmfParams,
-    MgpmfSettings, ParticleParams, ParticleSettings, RangeParams, RangeSettings, SwitchParams,
-    SwitchSettings,
+    GpsAiding, GpsParams, GrekfParams, GrekfSettings, GridPosterior, ImuNoise, Ins12Filter,
+    Ins12Params, Matrix12, MgpmfParams, MgpmfSettings, ParticleParams, ParticleSettings,
+    RangeParams, RangeSettings, SwitchParams, SwitchSettings,
 };
 use fathom_sensors::allan_imu::{AllanImu, AllanImuParams};
 use fathom_sensors::barometer::LinearBaroCalibration;
@@ -19,8 +19,7 @@ use super::check_scene::model_err;
 pub use super::check_scene::{SceneSpec, WorldSource};
 use super::method::Method;
 use super::scenario::{
-    AblationTargetToml, BaroInverse, DetectionToml, LidarToml, RangefindersToml, Ranging,
-    UrbanScenario,
+    BaroInverse, DetectionToml, LidarToml, RangefindersToml, Ranging, UrbanScenario,
 };
 use fathom_sim::SimError;
 use fathom_sim::method_list::select;
@@ -70,8 +69,10 @@ pub struct FilterSetup {
     pub noise: ImuNoise,
     /// GPS gate.
     pub gps: GpsAiding,
-    /// GREKF ray casting and gate.
+    /// Ray casting and gate of the grid filters' linear step.
     pub range: RangeSettings,
+    /// The GREKF: ray casting, gate, iterations, σ inflation, lost lock.
+    pub grekf: GrekfSettings,
     /// The MGPMF.
     pub mgpmf: MgpmfSettings,
     /// The particle filter.
@@ -87,8 +88,9 @@ pub struct FilterSetup {
 /// What an ablation changes.
 #[derive(Debug, Clone, PartialEq)]
 pub enum AblationKind {
-    /// Glass treated as opaque by the range sensor (the sensor of the ablation).
-    GaussianRanges(Box<RangeSensor>),
+    /// Another range model (the sensor of the ablation): Gaussian ranges
+    /// (`gaussian_ranges`) or glass and incidence effects (`glass_incidence`).
+    RangeModel(Box<RangeSensor>, &'static str),
     /// Another lidar step: the sensor and its step in degrees.
     LidarStep(Box<RangeSensor>, f64),
     /// The controller flies on the method's estimate.
@@ -112,7 +114,7 @@ impl Ablation {
     /// Short name used in row names (`buildings/MGPMF@gaussian_ranges`).
     pub fn label(&self) -> String {
         match &self.kind {
-            AblationKind::GaussianRanges(_) => "gaussian_ranges".into(),
+            AblationKind::RangeModel(_, label) => (*label).into(),
             AblationKind::LidarStep(_, step) => format!("lidar_step_{step}deg"),
             AblationKind::ControlOnEstimate => "control_on_estimate".into(),
             AblationKind::GridPosterior(GridPosterior::Interpolated) => {
@@ -185,6 +187,8 @@ pub struct Checked {
     pub ablations: Vec<Ablation>,
     /// The settings the paper does not give, `(scenario key, value)`, for the report.
     pub unstated: Vec<(String, String)>,
+    /// Shortest time in a mode, s (for the report).
+    pub switch_dwell_s: f64,
 }
 
 impl Checked {
@@ -234,6 +238,15 @@ fn detection(file: &str, key: &str, d: &DetectionToml) -> Result<DetectionParams
         full_until_deg: d.full_until_deg,
         zero_from_deg: d.zero_from_deg,
     })
+}
+
+/// The paper's simulated ranges: Gaussian noise only (no glass extra noise, every
+/// surface returns at any incidence).
+pub fn gaussian_only(mut p: RangeSensorParams) -> RangeSensorParams {
+    p.glass_extra_sigma_m = 0.0;
+    p.opaque_detection = DetectionParams::ALWAYS;
+    p.glass_detection = DetectionParams::ALWAYS;
+    p
 }
 
 /// The range-finder parameters of `[rangefinders]`.
@@ -437,12 +450,35 @@ impl UrbanScenario {
             filter_sigma: require_positive(file, "baro.filter_sigma_m", b.filter_sigma_m)?,
         };
 
-        let rangefinders = rangefinder_params(file, &self.rangefinders)?
+        let gaussian_main = match self.range_effects.as_deref() {
+            None | Some("glass_incidence") => false,
+            Some("none") => true,
+            Some(other) => {
+                return Err(SimError::invalid(
+                    file,
+                    "range_effects",
+                    format!("must be \"none\" or \"glass_incidence\", got {other:?}"),
+                ));
+            }
+        };
+        let model = |p: RangeSensorParams, gaussian: bool| {
+            if gaussian { gaussian_only(p) } else { p }
+        };
+        let rangefinders = model(rangefinder_params(file, &self.rangefinders)?, gaussian_main)
             .check()
             .map_err(|e| model_err(file, "rangefinders", e))?;
-        let lidar = lidar_params(file, &self.lidar)?
-            .check()
+        let lidar_range_params = lidar_params(file, &self.lidar)?
+            .to_range_params()
             .map_err(|e| model_err(file, "lidar", e))?;
+        let lidar = if gaussian_main {
+            gaussian_only(lidar_range_params.clone())
+                .check()
+                .map_err(|e| model_err(file, "lidar", e))?
+        } else {
+            lidar_params(file, &self.lidar)?
+                .check()
+                .map_err(|e| model_err(file, "lidar", e))?
+        };
 
         let f = &self.filter;
         let mut p0 = Ins12Filter::diagonal_covariance([
@@ -503,6 +539,64 @@ impl UrbanScenario {
         let range = range_params
             .check()
             .map_err(|e| model_err(file, "filter", e))?;
+        let zero_from = self
+            .lidar
+            .opaque_detection
+            .zero_from_deg
+            .min(self.rangefinders.opaque_detection.zero_from_deg);
+        if f.max_incidence_deg > zero_from {
+            return Err(SimError::invalid(
+                file,
+                "filter.max_incidence_deg",
+                format!(
+                    "{} deg is beyond the incidence from which the range sensors return nothing \
+                     on an opaque surface ({zero_from} deg, opaque_detection.zero_from_deg): \
+                     the filter would use rows no sensor can measure",
+                    f.max_incidence_deg
+                ),
+            ));
+        }
+        let grekf = GrekfParams {
+            range: range_params,
+            iterations: f.grekf_iterations.unwrap_or(1),
+            sigma_inflation: require_in_range(
+                file,
+                "filter.range_sigma_inflation",
+                f.range_sigma_inflation.unwrap_or(1.0),
+                1.0,
+                100.0,
+            )?,
+            lock_loss_updates: f.lock_loss_updates.unwrap_or(5).min(1000),
+            relock_inflation: f.relock_inflation.unwrap_or(4.0),
+        };
+        if let Some(n) = f.lock_loss_updates
+            && n > 1000
+        {
+            return Err(SimError::invalid(
+                file,
+                "filter.lock_loss_updates",
+                format!("must be 0 ... 1000, got {n}"),
+            ));
+        }
+        if let Some(k) = f.relock_inflation
+            && !(k > 1.0 && k <= 100.0)
+        {
+            return Err(SimError::invalid(
+                file,
+                "filter.relock_inflation",
+                format!("must be in (1, 100], got {k}"),
+            ));
+        }
+        if let Some(n) = f.grekf_iterations
+            && !(1..=20).contains(&n)
+        {
+            return Err(SimError::invalid(
+                file,
+                "filter.grekf_iterations",
+                format!("must be 1 ... 20, got {n}"),
+            ));
+        }
+        let grekf = grekf.check().map_err(|e| model_err(file, "filter", e))?;
         let m = &self.mgpmf;
         let posterior = match m.posterior.as_deref() {
             None | Some("interpolated") => GridPosterior::Interpolated,
@@ -589,6 +683,7 @@ impl UrbanScenario {
             noise,
             gps,
             range,
+            grekf,
             mgpmf,
             particle,
             switch,
@@ -649,28 +744,33 @@ impl UrbanScenario {
 
         let a = &self.ablations;
         let mut ablations = Vec::new();
-        if let Some(t) = &a.gaussian_ranges {
-            let AblationTargetToml { scenario, method } = t;
-            let (scene, method) =
-                target(file, "ablations.gaussian_ranges", scenario, method, &scenes)?;
-            let opaque_only = |mut p: RangeSensorParams| {
-                p.glass_extra_sigma_m = 0.0;
-                p.glass_detection = p.opaque_detection;
-                p.check()
-                    .map_err(|e| model_err(file, "ablations.gaussian_ranges", e))
+        for (key, target_toml, gaussian, label) in [
+            (
+                "ablations.gaussian_ranges",
+                &a.gaussian_ranges,
+                true,
+                "gaussian_ranges",
+            ),
+            (
+                "ablations.glass_incidence",
+                &a.glass_incidence,
+                false,
+                "glass_incidence",
+            ),
+        ] {
+            let Some(t) = target_toml else {
+                continue;
             };
-            let sensor = match scenes[scene].ranging {
-                Ranging::Rangefinders => {
-                    opaque_only(rangefinder_params(file, &self.rangefinders)?)?
-                }
-                Ranging::Lidar => opaque_only(
-                    lidar_params(file, &self.lidar)?
-                        .to_range_params()
-                        .map_err(|e| model_err(file, "lidar", e))?,
-                )?,
+            let (scene, method) = target(file, key, &t.scenario, &t.method, &scenes)?;
+            let params = match scenes[scene].ranging {
+                Ranging::Rangefinders => rangefinder_params(file, &self.rangefinders)?,
+                Ranging::Lidar => lidar_range_params.clone(),
             };
+            let sensor = model(params, gaussian)
+                .check()
+                .map_err(|e| model_err(file, key, e))?;
             ablations.push(Ablation {
-                kind: AblationKind::GaussianRanges(Box::new(sensor)),
+                kind: AblationKind::RangeModel(Box::new(sensor), label),
                 scene,
                 method,
             });
@@ -691,12 +791,18 @@ impl UrbanScenario {
                 ));
             }
             let step = require_positive(file, "ablations.lidar_step.step_deg", t.step_deg)?;
-            let sensor = LidarParams {
+            let stepped = LidarParams {
                 step_deg: step,
                 ..lidar_params(file, &self.lidar)?
-            }
-            .check()
-            .map_err(|e| model_err(file, "ablations.lidar_step.step_deg", e))?;
+            };
+            let bad_step = |e| model_err(file, "ablations.lidar_step.step_deg", e);
+            let sensor = if gaussian_main {
+                gaussian_only(stepped.to_range_params().map_err(bad_step)?)
+                    .check()
+                    .map_err(bad_step)?
+            } else {
+                stepped.check().map_err(bad_step)?
+            };
             if sensor.beams().len() > 20_000 {
                 return Err(SimError::invalid(
                     file,
@@ -785,6 +891,7 @@ impl UrbanScenario {
             ablation_runs: a.runs.min(self.runs),
             ablations,
             unstated: self.unstated(),
+            switch_dwell_s: self.switch.min_dwell_s,
         })
     }
 }

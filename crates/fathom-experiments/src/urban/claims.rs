@@ -27,8 +27,9 @@ pub fn diff_row(scene: &str, a: Method, b: Method) -> String {
 }
 
 /// The paired differences the analysis adds: `(a, b, metric)`.
-pub const DIFFERENCES: [(Method, Method, &str); 7] = [
+pub const DIFFERENCES: [(Method, Method, &str); 8] = [
     (Method::GpsIns, Method::GpsInsAllSats, "rmse_3d"),
+    (Method::GpsIns, Method::InsOnly, "rmse_3d"),
     (Method::Grekf, Method::InsOnly, "rmse_3d"),
     (Method::Mgpmf, Method::InsOnly, "rmse_3d"),
     (Method::Particle, Method::InsOnly, "rmse_3d"),

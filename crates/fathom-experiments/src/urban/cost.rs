@@ -84,6 +84,7 @@ pub(super) fn terms(s: &UrbanScenario) -> Vec<CostTerm> {
     let runs = s.runs as f64;
     let ablations = [
         s.ablations.gaussian_ranges.is_some(),
+        s.ablations.glass_incidence.is_some(),
         s.ablations.lidar_step.is_some(),
         s.ablations.control_on_estimate.is_some(),
         s.ablations.mgpmf_posterior.is_some(),

@@ -262,8 +262,10 @@ fn run0_figures(
     let structures = footprints(scene, lo, hi);
     let plan_truth = Series::new("truth", truth.iter().map(|p| (p[1], p[0])).collect());
     // GNSS-shadowed truth points: the true LOS count of the last GNSS epoch below
-    // the switching threshold
-    let threshold = c.filter.switch.enter_gps_at();
+    // the count at which the switching methods leave GPS/INS (the threshold run.rs
+    // counts the shadowed epochs with)
+    let threshold = c.filter.switch.leave_gps_below();
+    let reenter = c.filter.switch.enter_gps_at();
     let mut g = 0;
     let mut shadowed = Vec::new();
     for (t, p) in d.times[..k].iter().zip(truth) {
@@ -372,14 +374,24 @@ fn run0_figures(
     if d.gnss.len() > 1 {
         let t: Vec<f64> = d.gnss.iter().map(|g| g.0).collect();
         let n: Vec<f64> = d.gnss.iter().map(|g| g.1 as f64).collect();
-        let thr = vec![threshold as f64; t.len()];
+        let leave = vec![threshold as f64; t.len()];
+        let back = vec![reenter as f64; t.len()];
         let plot = LinePlot::new(
             format!("{name}: satellites in true line of sight (run 0)"),
             "time (s)",
             "satellites",
         )
         .with_series(Series::from_xy("LOS satellites", &t, &n)?)
-        .with_series(Series::from_xy("switching threshold", &t, &thr)?);
+        .with_series(Series::from_xy(
+            format!("leave GPS/INS below {threshold} (switch.min_los_satellites)"),
+            &t,
+            &leave,
+        )?)
+        .with_series(Series::from_xy(
+            format!("re-enter GPS/INS at {reenter} (+ hysteresis)"),
+            &t,
+            &back,
+        )?);
         out.figure(&format!("los_satellites_{name}.svg"), &plot)?;
     }
     if let Some(scan) = d.scan.as_ref().filter(|s| !s.hits.is_empty()) {

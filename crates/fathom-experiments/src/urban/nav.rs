@@ -65,10 +65,19 @@ pub struct NavCounts {
     pub gps_updates: usize,
     /// GPS fixes rejected by the gate.
     pub gps_rejected: usize,
-    /// Map-aided updates applied.
+    /// Map-aided updates applied (a GREKF update counts only when it used a beam).
     pub map_updates: usize,
     /// Map-aided updates that failed (no predicted hit, bad geometry).
     pub map_failed: usize,
+    /// GREKF updates in which every beam was left out (gated, grazing or no hit):
+    /// not map updates.
+    pub map_left_out: usize,
+    /// Mode switches (GPS/INS to map-aided and back).
+    pub switches: usize,
+    /// Times the GREKF lost lock (its lost-lock rule fired).
+    pub lost_lock: usize,
+    /// Times it re-locked (used beams again after a lost lock).
+    pub relocks: usize,
 }
 
 /// One method running (module docs).
@@ -173,7 +182,7 @@ impl Nav {
             .transpose()
             .map_err(|e| model("mode switch", e))?;
         let aider = match method {
-            Method::Grekf => Aider::Grekf(Grekf::new(f.range)),
+            Method::Grekf => Aider::Grekf(Grekf::new(f.grekf)),
             Method::Mgpmf => Aider::Mgpmf(Box::new(Mgpmf::new(f.mgpmf))),
             Method::Particle => Aider::Particle(
                 Box::new(ParticleFilter::new(f.particle)),
@@ -323,7 +332,12 @@ impl Nav {
             _ => {
                 let (pairs, count) = los_satellites(env, &pos, epoch);
                 if let Some(s) = self.switch.as_mut() {
-                    s.observe(t, count).map_err(|e| model("mode switch", e))?;
+                    let before = s.mode();
+                    let after = s.observe(t, count).map_err(|e| model("mode switch", e))?;
+                    self.counts.switches = s.switches();
+                    if before != after && after == NavMode::MapAided {
+                        self.enter_map_mode();
+                    }
                 }
                 if self.map_aided() {
                     return Ok(false);
@@ -353,6 +367,18 @@ impl Nav {
         }
     }
 
+    /// A new map-aided stretch: the GREKF starts locked, the particle filter draws
+    /// its particles from the filter's (GPS/INS-converged) Gaussian.
+    fn enter_map_mode(&mut self) {
+        match &mut self.aider {
+            Aider::Grekf(g) => g.reset(),
+            Aider::Particle(p, _) => p.reset(),
+            _ => {}
+        }
+    }
+
+    /// The map-aided update of a range epoch; returns whether the filter changed (to
+    /// be fed back). Counted as a map update only when it used the ranges.
     fn map_update(&mut self, env: &NavEnv<'_>, epoch: &RangeEpoch) -> bool {
         let nominal = self.nominal();
         let grid = matches!(self.aider, Aider::Mgpmf(_) | Aider::Particle(..));
@@ -371,9 +397,22 @@ impl Nav {
         let baro = Some(&epoch.baro);
         let ok = match &mut self.aider {
             Aider::None => return false,
-            Aider::Grekf(g) => g
-                .update(&mut self.filter, &nominal, &self.beams, baro, env.map)
-                .is_ok(),
+            Aider::Grekf(g) => {
+                match g.update(&mut self.filter, &nominal, &self.beams, baro, env.map) {
+                    Ok(rep) => {
+                        self.counts.lost_lock += usize::from(rep.lock_lost);
+                        self.counts.relocks += usize::from(rep.relocked);
+                        if rep.all_beams_left_out {
+                            self.counts.map_left_out += 1;
+                            // the baro may have updated the height, the inflation the
+                            // covariance: fed back, not counted as a map update
+                            return true;
+                        }
+                        true
+                    }
+                    Err(_) => false,
+                }
+            }
             Aider::Mgpmf(m) => m
                 .update(&mut self.filter, &nominal, &self.beams, baro, env.map)
                 .is_ok(),

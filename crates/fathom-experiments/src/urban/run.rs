@@ -228,7 +228,7 @@ pub(super) fn ablation_run(
     let scene = &prep.scenes[ablation.scene];
     let env = nav_env(prep, scene, spec.ranging);
     let record = match &ablation.kind {
-        AblationKind::GaussianRanges(sensor) | AblationKind::LidarStep(sensor, _) => {
+        AblationKind::RangeModel(sensor, _) | AblationKind::LidarStep(sensor, _) => {
             let flown = fly_and_sense(prep, scene, spec.ranging, sensor, &streams)?;
             let r = run_method(prep, &env, ablation.method, &flown, dx0, &streams, None)?;
             method_record(prep, ablation.method, &r)?

@@ -39,6 +39,15 @@ pub struct UrbanScenario {
     /// `"MGPMF"`, `"PF"`. Default: all.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub methods: Option<Vec<String>>,
+    /// The range sensors' model in the main batch: `"none"`, Gaussian noise only
+    /// (every beam returns at any incidence, glass ranges like opaque ones: the paper's
+    /// simulation, section 4.2), or `"glass_incidence"`, the glass extra noise and the
+    /// detection probability falling with the incidence angle of `[rangefinders]` and
+    /// `[lidar]`. Absent: `"glass_incidence"`.
+    ///
+    /// Range: `"none"` or `"glass_incidence"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range_effects: Option<String>,
     /// The quadrotor's flight (truth): clock, speeds, wind.
     pub vehicle: VehicleToml,
     /// The IMU (ADIS16448, Table 1), in data-sheet units.
@@ -364,10 +373,38 @@ pub struct FilterToml {
     ///
     /// Range: (0, 1).
     pub range_gate_probability: f64,
-    /// Largest incidence of a predicted hit whose row is used.
+    /// Largest incidence of a predicted hit whose row is used (GREKF and the linear
+    /// step of the grid filters). It must not exceed the incidence from which the
+    /// scenarios' range sensors return nothing on an opaque surface
+    /// (`opaque_detection.zero_from_deg`): a row there has no measurement to match.
     ///
     /// Unit: deg. Range: (0, 90).
     pub max_incidence_deg: f64,
+    /// Iterations of the GREKF update (iterated EKF: the rays cast again from the
+    /// updated pose; 1 is the paper's single update). Absent: 1.
+    ///
+    /// Range: 1 … 20.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grekf_iterations: Option<usize>,
+    /// Factor on every beam's range σ in the GREKF update and gate, for the errors
+    /// the beams share (one facet seen by many beams, the faceted map, the attitude).
+    /// Absent: 1 (the beams independent).
+    ///
+    /// Range: 1 … 100.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub range_sigma_inflation: Option<f64>,
+    /// Consecutive GREKF updates with every beam left out after which it has lost
+    /// lock and inflates its position, velocity and attitude covariance by
+    /// `relock_inflation` (repeated until a beam is used again); 0 never. Absent: 5.
+    ///
+    /// Range: 0 … 1000.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lock_loss_updates: Option<usize>,
+    /// The covariance factor of a lost lock. Absent: 4.
+    ///
+    /// Range: (1, 100].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub relock_inflation: Option<f64>,
 }
 
 /// `[mgpmf]`: grid, likelihood and rate of the point-mass filter (section 2.3).
@@ -554,9 +591,11 @@ pub struct PathToml {
     /// Waypoints in the world's frame (a file world: the file's axes, units and
     /// offset, like its vertices), flown in order along straight legs; the vehicle
     /// rests at the first. Required for a file world; a preset world without them
-    /// flies the preset's path (bridge: under the deck between the pier rows, from
-    /// 25 m after the deck's south end to 25 m before its north end; buildings: the
-    /// square, turning 90° in place at the far corner). Every waypoint must lie within
+    /// flies the preset's path, which starts at rest in open sky (bridge: 40 m south
+    /// of the deck, at most 80 % of the ground margin; then at the path height under
+    /// the deck between the pier rows to as far beyond its north end; buildings: at
+    /// twice the clearance south-west of the square's first corner, then the square,
+    /// turning 90° in place at the far corner). Every waypoint must lie within
     /// the mesh's plan bounds and not below it, and no leg may pass through the mesh.
     ///
     /// Unit: file units (m for presets). Range: ≥ 2 waypoints.
@@ -584,6 +623,11 @@ pub struct AblationsToml {
     /// its simulation optimistic for this reason).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub gaussian_ranges: Option<AblationTargetToml>,
+    /// Range effects on (glass extra noise, detection falling with the incidence angle,
+    /// as `[rangefinders]` and `[lidar]` give them) against a main batch with
+    /// `range_effects = "none"` (the paper's Gaussian ranges).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub glass_incidence: Option<AblationTargetToml>,
     /// Another lidar step (the paper: 2.5°; the device resolves 0.25°).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub lidar_step: Option<LidarStepToml>,

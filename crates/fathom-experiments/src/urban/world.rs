@@ -19,6 +19,11 @@ use super::check::{Checked, SceneSpec, WorldSource};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Environment;
 
+/// How far the `bridge` preset's path starts south of the deck and ends north of it
+/// (at most 80 % of the ground margin), m: the flight rests and converges on GPS/INS
+/// in open sky, flies under the deck (the GNSS shadow), and comes out the other side.
+pub const BRIDGE_OPEN_SKY_M: f64 = 40.0;
+
 /// One prepared scenario.
 pub struct PreparedScene {
     /// The world.
@@ -61,7 +66,9 @@ pub fn prepare(checked: Checked, env: &Environment) -> Result<Prepared, SimError
     })
 }
 
-/// The `n` satellites of the nominal constellation highest above the mask at `t = 0`.
+/// The `n` satellites of the nominal constellation highest above the mask at `t = 0`;
+/// fewer than `n` above it is an error naming `gnss.satellites` (never a silent
+/// truncation).
 fn choose_satellites(checked: &Checked) -> Result<GnssReceiver, SimError> {
     let all = checked
         .gnss
@@ -84,17 +91,26 @@ fn choose_satellites(checked: &Checked) -> Result<GnssReceiver, SimError> {
         .filter(|(_, sin_el)| *sin_el >= mask)
         .collect();
     up.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
-    up.truncate(checked.gnss.satellites);
-    if up.len() < 4 {
+    let wanted = checked.gnss.satellites;
+    if up.len() < wanted {
+        let g = &checked.gnss.params;
         return Err(SimError::invalid(
             &checked.file,
-            "gnss.elevation_mask_deg",
+            "gnss.satellites",
             format!(
-                "only {} satellites above the mask at t = 0 (a fix needs 4)",
+                "{wanted} satellites requested, but only {} of the nominal constellation are \
+                 above the {} deg mask at t = 0 (gnss.epoch_offset_s = {} s, {} N {} E): \
+                 request at most {}, or choose another epoch_offset_s",
+                up.len(),
+                g.elevation_mask_deg,
+                g.epoch_offset_s,
+                g.frame.lat_deg,
+                g.frame.lon_deg,
                 up.len()
             ),
         ));
     }
+    up.truncate(wanted);
     up.sort_by_key(|(i, _)| *i);
     let params = GnssParams {
         satellites: up
@@ -165,12 +181,13 @@ fn prepare_scene(
     let (mesh, source, preset_path) = match &spec.world {
         WorldSource::Bridge(b) => {
             let p = b.params();
-            let margin = 25f64.min(p.deck_length_m / 4.0);
+            // open sky south of the deck, under it, open sky north of it
             let (z0, z1) = (-spec.start_height, -p.path_height_m);
+            let open = BRIDGE_OPEN_SKY_M.min(0.8 * p.ground_margin_m);
             let path = vec![
-                Vector3::new(margin, 0.0, z0),
-                Vector3::new(margin, 0.0, z1),
-                Vector3::new(p.deck_length_m - margin, 0.0, z1),
+                Vector3::new(-open, 0.0, z0),
+                Vector3::new(-open, 0.0, z1),
+                Vector3::new(p.deck_length_m + open, 0.0, z1),
             ];
             (
                 b.mesh().map_err(model)?,
@@ -180,9 +197,12 @@ fn prepare_scene(
         }
         WorldSource::Buildings(b) => {
             let p = b.params();
+            // rest and climb outside the block's south-west corner, then the square
             let (s, z0, z1) = (p.path_side_m, -spec.start_height, -p.path_height_m);
+            let out = -(p.clearance_m * 2.0);
             let path = vec![
-                Vector3::new(0.0, 0.0, z0),
+                Vector3::new(out, out, z0),
+                Vector3::new(out, out, z1),
                 Vector3::new(0.0, 0.0, z1),
                 Vector3::new(s, 0.0, z1),
                 Vector3::new(s, s, z1),
@@ -231,7 +251,7 @@ fn prepare_scene(
                 match i {
                     0 => w.with_yaw(0.0),
                     // the buildings flight turns in place at the far corner (spec D)
-                    3 if turn_at => w.with_yaw(std::f64::consts::FRAC_PI_2),
+                    4 if turn_at => w.with_yaw(std::f64::consts::FRAC_PI_2),
                     _ => w,
                 }
             })
