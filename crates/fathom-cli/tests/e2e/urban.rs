@@ -80,6 +80,17 @@ fn preset_rows_claims_figures_and_report() {
     );
     row(rows, "bridge/GREKF@lidar_step_0.25deg", "rmse_3d");
     row(rows, "buildings/MGPMF@control_on_estimate", "rmse_3d");
+    // open sky: GPS/INS against INS-only where the sky is open (paired, signed)
+    for scene in ["bridge", "buildings"] {
+        row(rows, &format!("{scene}/GPS/INS"), "rmse_3d_open");
+        let d = row(
+            rows,
+            &format!("{scene}/GPS/INS-vs-INS-only"),
+            "diff_rmse_3d_open",
+        );
+        assert_eq!(d["ci_method"], "student-t", "{d}");
+        row(rows, &format!("{scene}/GPS/INS"), "gps_reacquired");
+    }
     // issue 33: the flights switch; the switching rows have their fixed names
     for scene in ["bridge", "buildings"] {
         let used = row(rows, &format!("{scene}/GNSS"), "satellites_used");
@@ -109,7 +120,13 @@ fn preset_rows_claims_figures_and_report() {
     }
     let per_run = read(&out, "per_run.csv");
     let header = per_run.lines().next().unwrap();
-    for col in ["switches", "lost_lock", "relocks", "map_left_out"] {
+    for col in [
+        "switches",
+        "lost_lock",
+        "relocks",
+        "map_left_out",
+        "gps_reacquired",
+    ] {
         assert!(
             header.split(',').any(|h| h == col),
             "per_run.csv lacks {col}"
@@ -128,6 +145,7 @@ fn preset_rows_claims_figures_and_report() {
         "mgpmf_buildings_table2_rmse_h",
         "los_check_improves_gps",
         "map_aided_beats_ins_only",
+        "gps_ins_beats_ins_only_in_open_sky",
         "mgpmf_beats_grekf_near_walls",
     ] {
         assert!(claims.contains(&id), "claim {id} missing: {claims:?}");

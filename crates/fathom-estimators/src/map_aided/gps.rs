@@ -4,6 +4,15 @@
 //! Measurement model (error convention of [`super`]): `z_p = p + v_p = p_hat - dp + v_p`,
 //! so `H = [-I 0 0 0]`; with velocity, `z_v = v_hat - dv + v_v`, `H = [0 -I 0 0]`.
 //! The innovation is taken at the current estimate, `z - h(x_hat (-) dx_hat)`.
+//!
+//! A filter that diverged while GPS was away (in a GNSS shadow) rejects every fix
+//! when it comes back: its covariance is too small for the error the fix shows.
+//! [`GpsReacquire`] counts the fixes rejected in a row and, after
+//! [`GpsAiding::reacquire_after`] of them, widens the position (and velocity)
+//! covariance by the outer product of the innovation before applying the next fix:
+//! with `S' = S + nu nu^T` the NIS is `a / (1 + a) < 1` (`a = nu^T S^-1 nu`), so the
+//! fix passes the gate and the estimate jumps to it, as an autopilot's estimator
+//! resets to GNSS after a run of failed innovation checks.
 
 use fathom_core::Time;
 use nalgebra::{Matrix3, SMatrix, SVector, Vector3};
@@ -43,6 +52,8 @@ pub struct GpsOutcome {
     pub nis: f64,
     /// The dimension of the fix (3: position, 6: with velocity).
     pub dof: usize,
+    /// The fix re-acquired the position after a run of rejections ([`GpsReacquire`]).
+    pub reacquired: bool,
 }
 
 fn outcome<const M: usize>(g: &Gate<M>) -> GpsOutcome {
@@ -50,6 +61,7 @@ fn outcome<const M: usize>(g: &Gate<M>) -> GpsOutcome {
         accepted: g.is_accepted(),
         nis: g.nis(),
         dof: M,
+        reacquired: false,
     }
 }
 
@@ -115,6 +127,65 @@ impl Ins12Filter {
                 Ok(outcome(&g))
             }
         }
+    }
+}
+
+/// GPS updates with re-acquisition after a run of rejected fixes (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct GpsReacquire {
+    rejected_in_a_row: usize,
+}
+
+impl GpsReacquire {
+    /// Fixes rejected in a row so far.
+    pub fn rejected_in_a_row(&self) -> usize {
+        self.rejected_in_a_row
+    }
+
+    /// [`Ins12Filter::update_gps`], and after `aiding.reacquire_after()` rejections
+    /// in a row the re-acquisition (module docs); [`GpsOutcome::reacquired`] says
+    /// when it happened.
+    ///
+    /// # Errors
+    /// As [`Ins12Filter::update_gps`]; the filter and the count are unchanged on
+    /// error.
+    pub fn update(
+        &mut self,
+        filter: &mut Ins12Filter,
+        nominal: &NominalNav,
+        fix: &GpsFix,
+        aiding: &GpsAiding,
+    ) -> Result<GpsOutcome, MapAidedError> {
+        let out = filter.update_gps(nominal, fix, aiding)?;
+        if out.accepted {
+            self.rejected_in_a_row = 0;
+            return Ok(out);
+        }
+        let run = self.rejected_in_a_row + 1;
+        let n = aiding.reacquire_after();
+        if n == 0 || run < n {
+            self.rejected_in_a_row = run;
+            return Ok(out);
+        }
+        let est = nominal.corrected(filter.error_mean());
+        let mut f = filter.clone();
+        let dp = fix.pos_in_nav - est.pos_in_nav;
+        f.widen_covariance_block(POS, &(dp * dp.transpose()))?;
+        if let Some(v) = &fix.velocity {
+            let dv = v.vel_in_nav - est.vel_in_nav;
+            f.widen_covariance_block(VEL, &(dv * dv.transpose()))?;
+        }
+        let again = f.update_gps(nominal, fix, aiding)?;
+        if again.accepted {
+            *filter = f;
+            self.rejected_in_a_row = 0;
+            return Ok(GpsOutcome {
+                reacquired: true,
+                ..again
+            });
+        }
+        self.rejected_in_a_row = run;
+        Ok(out)
     }
 }
 
@@ -192,5 +263,47 @@ mod tests {
         let e = f.update_gps(&nav, &neg, &aid).unwrap_err();
         assert_eq!(e.time(), Some(5.0), "{e}");
         assert_eq!(f, before);
+    }
+
+    /// A filter 100 m off: without re-acquisition every fix is rejected for ever;
+    /// with `reacquire_after = 3` the third rejected fix re-acquires and the estimate
+    /// lands within a metre of the fix; a consistent fix resets the count.
+    #[test]
+    fn reacquisition_after_a_run_of_rejections() {
+        let (f0, nav, _) = setup();
+        let fix = GpsFix {
+            pos_in_nav: nav.pos_in_nav + Vector3::new(100.0, -50.0, 0.0),
+            pos_cov: Matrix3::identity(),
+            velocity: None,
+        };
+        let never = GpsParams::default().check().unwrap();
+        let mut f = f0.clone();
+        let mut r = GpsReacquire::default();
+        for _ in 0..20 {
+            let o = r.update(&mut f, &nav, &fix, &never).unwrap();
+            assert!(!o.accepted && !o.reacquired);
+        }
+        assert_eq!(f, f0);
+        assert_eq!(r.rejected_in_a_row(), 20);
+        let after3 = GpsParams {
+            reacquire_after_rejections: 3,
+            ..GpsParams::default()
+        }
+        .check()
+        .unwrap();
+        let mut f = f0.clone();
+        let mut r = GpsReacquire::default();
+        for k in 1..=3 {
+            let o = r.update(&mut f, &nav, &fix, &after3).unwrap();
+            assert_eq!(o.reacquired, k == 3, "fix {k}");
+            assert_eq!(o.accepted, k == 3);
+        }
+        assert_eq!(r.rejected_in_a_row(), 0);
+        let c = f.take_correction();
+        let moved = c.apply(&nav).pos_in_nav;
+        assert!((moved - fix.pos_in_nav).norm() < 1.0, "{moved}");
+        // a consistent fix is accepted and keeps the count at 0
+        let o = r.update(&mut f, &c.apply(&nav), &fix, &after3).unwrap();
+        assert!(o.accepted && !o.reacquired);
     }
 }

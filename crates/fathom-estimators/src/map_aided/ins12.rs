@@ -243,6 +243,30 @@ impl Ins12Filter {
         Ok(())
     }
 
+    /// Adds `spread` (symmetric positive semi-definite, m² or (m/s)²) to the
+    /// covariance block of the position (`block = POS`) or the velocity
+    /// (`block = VEL`) error: the filter admits an error it did not account for.
+    ///
+    /// # Errors
+    /// [`MapAidedError::InvalidInput`] for a non-finite spread,
+    /// [`MapAidedError::Filter`] when the result is not a valid covariance; the filter
+    /// is unchanged on error.
+    pub fn widen_covariance_block(
+        &mut self,
+        block: usize,
+        spread: &nalgebra::Matrix3<f64>,
+    ) -> Result<(), MapAidedError> {
+        let t = self.kf.time();
+        super::error::finite_input("covariance spread", spread.as_slice(), t)?;
+        let mut p = *self.kf.covariance();
+        let b = block.min(N_STATES - 3);
+        let mut v = p.fixed_view_mut::<3, 3>(b, b);
+        v += spread;
+        self.kf
+            .set_estimate(Gaussian::new_unchecked(*self.kf.state(), p))?;
+        Ok(())
+    }
+
     /// The underlying Kalman filter, mutable (for the updates of this module; each
     /// keeps the no-change-on-error rule).
     pub(crate) fn kf_mut(&mut self) -> &mut KalmanFilter<N_STATES> {

@@ -69,14 +69,14 @@ use nalgebra::{SMatrix, SVector};
 
 pub use error::MapAidedError;
 pub use findings::{PAPER_FINDINGS, PaperFinding};
-pub use gps::{GpsFix, GpsOutcome, GpsVelocity};
+pub use gps::{GpsFix, GpsOutcome, GpsReacquire, GpsVelocity};
 pub use grekf::{Grekf, GrekfReport};
 pub use ins12::{Correction, Ins12Filter, NominalNav};
 pub use mgpmf::{Mgpmf, MgpmfReport};
 pub use params::{
     GpsAiding, GpsParams, GrekfParams, GrekfSettings, GridPosterior, ImuNoise, Ins12Params,
-    MgpmfParams, MgpmfSettings, ParticleParams, ParticleSettings, RangeParams, RangeSettings,
-    SwitchParams, SwitchSettings,
+    MgpmfParams, MgpmfSettings, ParticleKernel, ParticleParams, ParticleSettings, RangeParams,
+    RangeSettings, SwitchParams, SwitchSettings,
 };
 pub use particle::{ParticleFilter, ParticleReport};
 pub use range_model::{BaroHeight, BeamGeometry, RangeBeam};

@@ -119,12 +119,18 @@ pub struct GpsParams {
     /// Probability that a consistent fix passes the chi-square gate (3 dof for a
     /// position fix, 6 with velocity). Default 0.999.
     pub gate_probability: f64,
+    /// After this many fixes in a row rejected by the gate, the next fix re-acquires
+    /// the position ([`super::GpsReacquire`]: the covariance is widened by the error
+    /// the fix shows, then the fix is applied). 0 (the default, the paper's filter):
+    /// never; a diverged filter then rejects every fix for ever.
+    pub reacquire_after_rejections: usize,
 }
 
 impl Default for GpsParams {
     fn default() -> Self {
         Self {
             gate_probability: 0.999,
+            reacquire_after_rejections: 0,
         }
     }
 }
@@ -134,6 +140,7 @@ impl Default for GpsParams {
 pub struct GpsAiding {
     pub(crate) gate_position: f64,
     pub(crate) gate_position_velocity: f64,
+    pub(crate) reacquire_after: usize,
 }
 
 impl GpsAiding {
@@ -145,6 +152,11 @@ impl GpsAiding {
     /// NIS threshold of a position + velocity fix (6 dof).
     pub fn gate_position_velocity(&self) -> f64 {
         self.gate_position_velocity
+    }
+
+    /// Rejected fixes in a row after which the next fix re-acquires (0: never).
+    pub fn reacquire_after(&self) -> usize {
+        self.reacquire_after
     }
 }
 
@@ -158,6 +170,7 @@ impl GpsParams {
         Ok(GpsAiding {
             gate_position: chi_square_gate(p, 3),
             gate_position_velocity: chi_square_gate(p, 6),
+            reacquire_after: self.reacquire_after_rejections,
         })
     }
 }
@@ -510,12 +523,30 @@ pub struct ParticleParams {
     pub outlier_probability: f64,
     /// Ray casting and the linear step's gate.
     pub range: RangeParams,
+    /// The jitter after resampling. Default [`ParticleKernel::Roughening`].
+    pub kernel: ParticleKernel,
+}
+
+/// The jitter of the particles after resampling ([`super::particle`] docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum ParticleKernel {
+    /// Gordon et al. (1993): std `K E_j N^(-1/3)` per axis, `E_j` the spread of the
+    /// prior particles, `K` = [`ParticleParams::roughening`].
+    #[default]
+    Roughening,
+    /// The regularized particle filter (Musso, Oudjane & Le Gland 2001): a Gaussian
+    /// kernel with covariance `h_opt^2 Sigma`, `Sigma` the weighted posterior
+    /// covariance plus the particle set's resolution `(E_j N^(-1/3))^2 / 12` per
+    /// axis, `h_opt = (4 / (N (d + 2)))^(1 / (d + 4))`, `d = 3`
+    /// (`roughening` unused).
+    Regularized,
 }
 
 impl Default for ParticleParams {
     fn default() -> Self {
         Self {
             particles: 41 * 41 * 9,
+            kernel: ParticleKernel::Roughening,
             roughening: 0.2,
             outlier_probability: 0.05,
             range: RangeParams::default(),
@@ -554,6 +585,7 @@ impl ParticleParams {
         Ok(ParticleSettings {
             particles: self.particles,
             roughening: k,
+            kernel: self.kernel,
             outlier_probability: check_outlier(
                 "particle.outlier_probability",
                 self.outlier_probability,
@@ -568,6 +600,7 @@ impl ParticleParams {
 pub struct ParticleSettings {
     pub(crate) particles: usize,
     pub(crate) roughening: f64,
+    pub(crate) kernel: ParticleKernel,
     pub(crate) outlier_probability: f64,
     pub(crate) range: RangeSettings,
 }
@@ -687,6 +720,7 @@ mod tests {
         for p in [0.0, 1.0, f64::NAN] {
             let e = GpsParams {
                 gate_probability: p,
+                ..GpsParams::default()
             };
             assert_eq!(field(e.check().unwrap_err()), "gps.gate_probability");
         }

@@ -17,7 +17,10 @@
 //!    is the prior, so the weight is the likelihood alone.
 //! 3. **Posterior of `n`**: the weighted mean and covariance (eq. 17-18) plus the
 //!    covariance of the roughening kernel below.
-//! 4. **Systematic resampling** (one uniform draw), then **roughening** (Gordon,
+//! 4. **Systematic resampling** (one uniform draw), then the jitter of
+//!    [`ParticleKernel`]: the regularized filter's Gaussian kernel on the posterior
+//!    covariance (the posterior of `n` then gets the kernel's `1 + h^2` on it), or
+//!    **roughening** (Gordon,
 //!    Salmond & Smith 1993): each particle is jittered with std
 //!    `K E_j N^(-1/3)` on axis `j`, `E_j` the spread (max - min) of the particles on
 //!    that axis: of the prior particles, where Gordon et al. take the resampled ones,
@@ -39,7 +42,7 @@ use super::likelihood::{RayBuffers, model};
 use super::marginal::{
     LinearStep, LinearStepReport, Partition, normalize_log_weights, weighted_moments,
 };
-use super::params::ParticleSettings;
+use super::params::{ParticleKernel, ParticleSettings};
 use super::range_model::{BaroHeight, RangeBeam, check_update_inputs};
 
 /// What one particle-filter update did.
@@ -191,7 +194,7 @@ impl ParticleFilter {
             self.next.push(self.points[i] - n_mean);
             u += step;
         }
-        // roughening, with the spread of the prior particles (the resampled set may
+        // the jitter, with the spread of the prior particles (the resampled set may
         // have collapsed onto one particle)
         let mut lo = Vector3::repeat(f64::INFINITY);
         let mut hi = Vector3::repeat(f64::NEG_INFINITY);
@@ -199,12 +202,27 @@ impl ParticleFilter {
             lo = lo.inf(d);
             hi = hi.sup(d);
         }
-        let jitter = (hi - lo) * (s.roughening * (n as f64).powf(-1.0 / 3.0));
-        for d in &mut self.next {
-            let xi = Vector3::from_fn(|_, _| StandardNormal.sample(rng));
-            *d += jitter.component_mul(&xi);
-        }
-        let n_cov = cov + Matrix3::from_diagonal(&jitter.component_mul(&jitter));
+        let cell = (hi - lo) * (n as f64).powf(-1.0 / 3.0);
+        let n_cov = match s.kernel {
+            ParticleKernel::Roughening => {
+                let jitter = cell * s.roughening;
+                for d in &mut self.next {
+                    let xi = Vector3::from_fn(|_, _| StandardNormal.sample(rng));
+                    *d += jitter.component_mul(&xi);
+                }
+                cov + Matrix3::from_diagonal(&jitter.component_mul(&jitter))
+            }
+            ParticleKernel::Regularized => {
+                let sigma = cov + Matrix3::from_diagonal(&cell.component_mul(&cell)) / 12.0;
+                let h2 = (4.0 / (n as f64 * 5.0)).powf(2.0 / 7.0);
+                let kernel = (sigma * h2).cholesky().ok_or_else(not_pd)?.l();
+                for d in &mut self.next {
+                    let xi = Vector3::from_fn(|_, _| StandardNormal.sample(rng));
+                    *d += kernel * xi;
+                }
+                sigma * (1.0 + h2)
+            }
+        };
         let post_chol = n_cov.cholesky().ok_or_else(not_pd)?.l();
         let linear = self.linear.update_and_commit(
             filter, &part, nominal, beams, &self.dirs, baro, &n_mean, &n_cov, &s.range, caster,
@@ -251,13 +269,17 @@ mod tests {
         let map = Planes::corner();
         let truth = nominal(Vector3::new(-4.0, -5.0, -3.0), 0.4);
         let z = beams(&map, &truth);
-        let settings = ParticleParams {
-            particles: 2000,
-            ..ParticleParams::with_grid_budget(&MgpmfParams::default())
-        }
-        .check()
-        .unwrap();
-        let run = |seed: u64| {
+        let with_kernel = |kernel| {
+            ParticleParams {
+                particles: 2000,
+                kernel,
+                ..ParticleParams::with_grid_budget(&MgpmfParams::default())
+            }
+            .check()
+            .unwrap()
+        };
+        let settings = with_kernel(ParticleKernel::Roughening);
+        let run_with = |seed: u64, settings: ParticleSettings| {
             let mut p0 = Ins12Filter::diagonal_covariance([3.0, 0.1, 0.01, 0.01]);
             p0[(ATT + 2, ATT + 2)] = 0.05f64.powi(2);
             let mut f =
@@ -271,7 +293,13 @@ mod tests {
             }
             (est, pf)
         };
+        let run = |seed: u64| run_with(seed, settings);
+        // the regularized kernel converges as well, and differs from roughening
+        let (est_reg, _) = run_with(5, with_kernel(ParticleKernel::Regularized));
+        let err_reg = (est_reg.pos_in_nav - truth.pos_in_nav).norm();
+        assert!(err_reg < 0.3, "regularized: error {err_reg}");
         let (est, pf) = run(5);
+        assert_ne!(est, est_reg);
         let err = (est.pos_in_nav - truth.pos_in_nav).norm();
         assert!(err < 0.3, "error {err}");
         assert_eq!(pf.deviations().len(), 2000);

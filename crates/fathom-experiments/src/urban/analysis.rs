@@ -5,6 +5,7 @@
 
 use super::check::Checked;
 use super::claims::{DIFFERENCES, claims, diff_row, method_row};
+use super::nav::Method;
 use super::paper::paper_value;
 use super::record::{BatchFold, KeptRun};
 use super::trace::MethodStats;
@@ -58,6 +59,8 @@ fn declare_units(out: &mut Analysis) {
         ("diff_rmse_h", "m"),
         ("diff_rmse_3d", "m"),
         ("diff_rmse_yaw", "deg"),
+        ("rmse_3d_open", "m"),
+        ("diff_rmse_3d_open", "m"),
         ("los_satellites_mean", "1"),
         ("shadowed_fraction", "1"),
         ("flight_duration_s", "s"),
@@ -67,6 +70,7 @@ fn declare_units(out: &mut Analysis) {
         ("switches", "count/run"),
         ("switches_min", "count"),
         ("lost_lock", "count/run"),
+        ("gps_reacquired", "count/run"),
         ("time_gps_ins_s", "s"),
     ] {
         out.unit(metric, unit);
@@ -107,6 +111,7 @@ pub(super) fn analyse(
                 &values(main, s, ib, k),
             )?;
         }
+        open_sky_rows(c, main, s, out)?;
         switching_rows(c, main, s, out)?;
         let g = format!("{}/GNSS", spec.name);
         out.row(Row::new(
@@ -160,13 +165,49 @@ pub(super) fn analyse(
     per_run_csv(c, main, out)
 }
 
+/// The open-sky rows of a scenario: `rmse_3d_open` of every method and the paired
+/// differences of [`OPEN_SKY_DIFFERENCES`], when every run has open-sky epochs
+/// (a world without open sky has none: the report says so).
+fn open_sky_rows(
+    c: &Checked,
+    main: &[KeptRun],
+    s: usize,
+    out: &mut Analysis,
+) -> Result<(), SimError> {
+    let spec = &c.scenes[s];
+    let open = |m: usize| -> Option<Vec<f64>> {
+        main.iter().map(|r| r[s].stats[m].rmse_3d_open).collect()
+    };
+    for (m, method) in c.methods.iter().enumerate() {
+        if let Some(v) = open(m) {
+            out.runs_row(&method_row(&spec.name, *method), "rmse_3d_open", &v)?;
+        }
+    }
+    for (a, b) in OPEN_SKY_DIFFERENCES {
+        let (Some(ia), Some(ib)) = (c.index_of(a), c.index_of(b)) else {
+            continue;
+        };
+        if let (Some(va), Some(vb)) = (open(ia), open(ib)) {
+            diff(out, &diff_row(&spec.name, a, b), "rmse_3d_open", &va, &vb)?;
+        }
+    }
+    Ok(())
+}
+
+/// The paired open-sky differences `a - b` of `rmse_3d_open`.
+pub(super) const OPEN_SKY_DIFFERENCES: [(Method, Method); 2] = [
+    (Method::GpsIns, Method::InsOnly),
+    (Method::GpsIns, Method::GpsInsAllSats),
+];
+
 /// A 3-D RMSE above this counts a run in `runs_beyond_1m`, m.
 pub(super) const BEYOND_M: f64 = 1.0;
 
 /// The per-scenario switching and divergence rows of every method: `switches` (mean
 /// per run, 95 % CI) and `switches_min` (fewest in any run) and `lost_lock` (mean) of
-/// the switching methods, `time_gps_ins_s` (mean), and `runs_beyond_1m` (runs whose
-/// rmse_3d exceeds 1 m) of every method.
+/// the switching methods, `time_gps_ins_s` (mean), `runs_beyond_1m` (runs whose
+/// rmse_3d exceeds 1 m) of every method, and `gps_reacquired` (mean) of every GPS
+/// method when re-acquisition is on.
 fn switching_rows(
     c: &Checked,
     main: &[KeptRun],
@@ -183,10 +224,14 @@ fn switching_rows(
             .filter(|v| **v > BEYOND_M)
             .count();
         out.row(Row::new(&name, "runs_beyond_1m", beyond as f64));
+        let counts: Vec<_> = main.iter().map(|r| r[s].counts[m]).collect();
+        if *method != Method::InsOnly && c.filter.gps.reacquire_after() > 0 {
+            let re: Vec<f64> = counts.iter().map(|n| n.gps_reacquired as f64).collect();
+            out.runs_row(&name, "gps_reacquired", &re)?;
+        }
         if !method.is_switching() {
             continue;
         }
-        let counts: Vec<_> = main.iter().map(|r| r[s].counts[m]).collect();
         let switches: Vec<f64> = counts.iter().map(|n| n.switches as f64).collect();
         out.runs_row(&name, "switches", &switches)?;
         let fewest = switches.iter().copied().fold(f64::INFINITY, f64::min);
@@ -230,6 +275,7 @@ fn per_run_csv(c: &Checked, main: &[KeptRun], out: &mut Analysis) -> Result<(), 
         "switches",
         "lost_lock",
         "relocks",
+        "gps_reacquired",
     ]);
     let mut records = Vec::new();
     for (i, run) in main.iter().enumerate() {
@@ -251,6 +297,7 @@ fn per_run_csv(c: &Checked, main: &[KeptRun], out: &mut Analysis) -> Result<(), 
                         n.switches,
                         n.lost_lock,
                         n.relocks,
+                        n.gps_reacquired,
                     ]
                     .map(|x| CsvCell::Int(x as i64)),
                 );

@@ -6,21 +6,21 @@ use fathom_core::units::{
 };
 use fathom_estimators::map_aided::{
     GpsAiding, GpsParams, GrekfParams, GrekfSettings, GridPosterior, ImuNoise, Ins12Filter,
-    Ins12Params, Matrix12, MgpmfParams, MgpmfSettings, ParticleParams, ParticleSettings,
-    RangeParams, RangeSettings, SwitchParams, SwitchSettings,
+    Ins12Params, Matrix12, MgpmfParams, MgpmfSettings, ParticleKernel, ParticleParams,
+    ParticleSettings, RangeParams, RangeSettings, SwitchParams, SwitchSettings,
 };
 use fathom_sensors::allan_imu::{AllanImu, AllanImuParams};
 use fathom_sensors::barometer::LinearBaroCalibration;
-use fathom_sensors::map_range::{DetectionParams, LidarParams, RangeSensor, RangeSensorParams};
+use fathom_sensors::map_range::{LidarParams, RangeSensor, RangeSensorParams};
 use fathom_traj::quadrotor::{FlightParams, Quadrotor, QuadrotorParams, WindParams};
 use nalgebra::Vector3;
 
 use super::check_scene::model_err;
 pub use super::check_scene::{SceneSpec, WorldSource};
+use super::check_sensors::{count_in, every};
+pub use super::check_sensors::{gaussian_only, lidar_params, rangefinder_params};
 use super::method::Method;
-use super::scenario::{
-    BaroInverse, DetectionToml, LidarToml, RangefindersToml, Ranging, UrbanScenario,
-};
+use super::scenario::{BaroInverse, Ranging, UrbanScenario};
 use fathom_sim::SimError;
 use fathom_sim::method_list::select;
 use fathom_sim::scenario::{
@@ -201,90 +201,6 @@ impl Checked {
     pub fn index_of(&self, m: Method) -> Option<usize> {
         self.methods.iter().position(|x| *x == m)
     }
-}
-
-/// Events every `rate` Hz on the IMU clock: the whole number of IMU steps.
-fn every(file: &str, key: &str, imu_rate: f64, rate: f64) -> Result<usize, SimError> {
-    require_positive(file, key, rate)?;
-    let n = imu_rate / rate;
-    if (n - n.round()).abs() > 1e-9 || n.round() < 1.0 || n > 1e6 {
-        return Err(SimError::invalid(
-            file,
-            key,
-            format!("{rate} Hz must divide imu.rate_hz = {imu_rate} Hz a whole number of times"),
-        ));
-    }
-    Ok(n.round() as usize)
-}
-
-fn detection(file: &str, key: &str, d: &DetectionToml) -> Result<DetectionParams, SimError> {
-    require_in_range(file, &format!("{key}.p_max"), d.p_max, 0.0, 1.0)?;
-    require_in_range(
-        file,
-        &format!("{key}.full_until_deg"),
-        d.full_until_deg,
-        0.0,
-        90.0,
-    )?;
-    require_in_range(
-        file,
-        &format!("{key}.zero_from_deg"),
-        d.zero_from_deg,
-        d.full_until_deg,
-        90.0,
-    )?;
-    Ok(DetectionParams {
-        p_max: d.p_max,
-        full_until_deg: d.full_until_deg,
-        zero_from_deg: d.zero_from_deg,
-    })
-}
-
-/// The paper's simulated ranges: Gaussian noise only (no glass extra noise, every
-/// surface returns at any incidence).
-pub fn gaussian_only(mut p: RangeSensorParams) -> RangeSensorParams {
-    p.glass_extra_sigma_m = 0.0;
-    p.opaque_detection = DetectionParams::ALWAYS;
-    p.glass_detection = DetectionParams::ALWAYS;
-    p
-}
-
-/// The range-finder parameters of `[rangefinders]`.
-pub fn rangefinder_params(file: &str, r: &RangefindersToml) -> Result<RangeSensorParams, SimError> {
-    let mut p = RangeSensorParams::paper_rangefinders();
-    p.max_range_m = require_positive(file, "rangefinders.max_range_m", r.max_range_m)?;
-    p.sigma_floor_m = require_non_negative(file, "rangefinders.sigma_floor_m", r.sigma_floor_m)?;
-    p.sigma_per_m = require_non_negative(file, "rangefinders.sigma_per_m", r.sigma_per_m)?;
-    p.glass_extra_sigma_m = require_non_negative(
-        file,
-        "rangefinders.glass_extra_sigma_m",
-        r.glass_extra_sigma_m,
-    )?;
-    p.opaque_detection = detection(file, "rangefinders.opaque_detection", &r.opaque_detection)?;
-    p.glass_detection = detection(file, "rangefinders.glass_detection", &r.glass_detection)?;
-    p.rate_hz = require_positive(file, "rangefinders.rate_hz", r.rate_hz)?;
-    Ok(p)
-}
-
-/// The lidar parameters of `[lidar]`.
-pub fn lidar_params(file: &str, l: &LidarToml) -> Result<LidarParams, SimError> {
-    let p = LidarParams {
-        first_deg: l.first_deg,
-        last_deg: l.last_deg,
-        step_deg: require_positive(file, "lidar.step_deg", l.step_deg)?,
-        rate_hz: require_positive(file, "lidar.rate_hz", l.rate_hz)?,
-        max_range_m: require_positive(file, "lidar.max_range_m", l.max_range_m)?,
-        sigma_m: require_non_negative(file, "lidar.sigma_m", l.sigma_m)?,
-        glass_extra_sigma_m: require_non_negative(
-            file,
-            "lidar.glass_extra_sigma_m",
-            l.glass_extra_sigma_m,
-        )?,
-        opaque_detection: detection(file, "lidar.opaque_detection", &l.opaque_detection)?,
-        glass_detection: detection(file, "lidar.glass_detection", &l.glass_detection)?,
-    };
-    p.azimuths_rad().map_err(|e| model_err(file, "lidar", e))?;
-    Ok(p)
 }
 
 fn target(
@@ -526,8 +442,15 @@ impl UrbanScenario {
         }
         .check()
         .map_err(|e| model_err(file, "filter", e))?;
+        let reacquire = count_in(
+            file,
+            "filter.gps_reacquire_after_rejections",
+            f.gps_reacquire_after_rejections.unwrap_or(0),
+            0..=1000,
+        )?;
         let gps = GpsParams {
             gate_probability: f.gps_gate_probability,
+            reacquire_after_rejections: reacquire,
         }
         .check()
         .map_err(|e| model_err(file, "filter.gps_gate_probability", e))?;
@@ -558,7 +481,12 @@ impl UrbanScenario {
         }
         let grekf = GrekfParams {
             range: range_params,
-            iterations: f.grekf_iterations.unwrap_or(1),
+            iterations: count_in(
+                file,
+                "filter.grekf_iterations",
+                f.grekf_iterations.unwrap_or(1),
+                1..=20,
+            )?,
             sigma_inflation: require_in_range(
                 file,
                 "filter.range_sigma_inflation",
@@ -566,18 +494,14 @@ impl UrbanScenario {
                 1.0,
                 100.0,
             )?,
-            lock_loss_updates: f.lock_loss_updates.unwrap_or(5).min(1000),
-            relock_inflation: f.relock_inflation.unwrap_or(4.0),
-        };
-        if let Some(n) = f.lock_loss_updates
-            && n > 1000
-        {
-            return Err(SimError::invalid(
+            lock_loss_updates: count_in(
                 file,
                 "filter.lock_loss_updates",
-                format!("must be 0 ... 1000, got {n}"),
-            ));
-        }
+                f.lock_loss_updates.unwrap_or(5),
+                0..=1000,
+            )?,
+            relock_inflation: f.relock_inflation.unwrap_or(4.0),
+        };
         if let Some(k) = f.relock_inflation
             && !(k > 1.0 && k <= 100.0)
         {
@@ -585,15 +509,6 @@ impl UrbanScenario {
                 file,
                 "filter.relock_inflation",
                 format!("must be in (1, 100], got {k}"),
-            ));
-        }
-        if let Some(n) = f.grekf_iterations
-            && !(1..=20).contains(&n)
-        {
-            return Err(SimError::invalid(
-                file,
-                "filter.grekf_iterations",
-                format!("must be 1 ... 20, got {n}"),
             ));
         }
         let grekf = grekf.check().map_err(|e| model_err(file, "filter", e))?;
@@ -619,8 +534,20 @@ impl UrbanScenario {
         let mgpmf = mgpmf_params
             .check()
             .map_err(|e| model_err(file, "mgpmf", e))?;
+        let kernel = match self.particle.kernel.as_deref() {
+            None | Some("roughening") => ParticleKernel::Roughening,
+            Some("regularized") => ParticleKernel::Regularized,
+            Some(other) => {
+                return Err(SimError::invalid(
+                    file,
+                    "particle.kernel",
+                    format!("must be \"roughening\" or \"regularized\", got {other:?}"),
+                ));
+            }
+        };
         let particle = ParticleParams {
             roughening: self.particle.roughening,
+            kernel,
             ..ParticleParams::with_grid_budget(&mgpmf_params)
         }
         .check()

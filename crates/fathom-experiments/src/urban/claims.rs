@@ -11,6 +11,7 @@
 //! | `los_check_improves_gps` | `buildings/GPS/INS-vs-GPS/INS-all-sats` `diff_rmse_3d` | the paired CI lies below 0 |
 //! | `map_aided_beats_ins_only` | `bridge/GREKF-vs-INS-only`, `buildings/MGPMF-vs-INS-only` `diff_rmse_3d` | both paired CIs lie below 0 |
 //! | `mgpmf_beats_grekf_near_walls` | `buildings/MGPMF-vs-GREKF` `diff_rmse_h` | the paired CI lies below 0 |
+//! | `gps_ins_beats_ins_only_in_open_sky` | `<scene>/GPS/INS-vs-INS-only` `diff_rmse_3d_open` of every scenario that has it | every paired CI lies below 0 (a check of the simulation: GPS must help where the sky is open) |
 
 use super::nav::Method;
 use super::paper::{ACCURACY_M, BRIDGE_ATT_BOUND_DEG, PRECISION_2SIGMA_M, TABLE2};
@@ -190,6 +191,31 @@ pub fn claims(rows: &[Row], tolerance: f64) -> Vec<Claim> {
                 + " (paired 95 % CIs; holds when all lie below 0)",
         ));
     }
+    let open: Vec<(&str, &Row)> = rows
+        .iter()
+        .filter(|r| r.metric == "diff_rmse_3d_open")
+        .filter_map(|r| {
+            let scene = r.method.strip_suffix("/GPS/INS-vs-INS-only")?;
+            Some((scene, r))
+        })
+        .collect();
+    if !open.is_empty() {
+        out.push(Claim::new(
+            "gps_ins_beats_ins_only_in_open_sky",
+            "where the sky is open GPS/INS is more accurate than the INS alone (a check of the simulation, not a claim of the paper)",
+            open.iter().all(|(_, r)| upper(r) < 0.0),
+            open.iter()
+                .map(|(s, r)| {
+                    format!(
+                        "{s}: rmse_3d over the open-sky epochs, GPS/INS minus INS-only {} m",
+                        ci_text(r, 3)
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(" · ")
+                + " (paired 95 % CIs; holds when all lie below 0)",
+        ));
+    }
     if let Some(r) = find(
         rows,
         &diff_row("buildings", Method::Mgpmf, Method::Grekf),
@@ -244,6 +270,18 @@ mod tests {
                 -0.1,
                 [-0.2, -0.05],
             ),
+            row(
+                "bridge/GPS/INS-vs-INS-only",
+                "diff_rmse_3d_open",
+                -3.0,
+                [-4.0, -2.0],
+            ),
+            row(
+                "buildings/GPS/INS-vs-INS-only",
+                "diff_rmse_3d_open",
+                -3.0,
+                [-4.0, -2.0],
+            ),
         ];
         for (m, p) in TABLE2
             .iter()
@@ -275,11 +313,19 @@ mod tests {
             "los_check_improves_gps",
             "map_aided_beats_ins_only",
             "mgpmf_beats_grekf_near_walls",
+            "gps_ins_beats_ins_only_in_open_sky",
         ];
         for id in ids {
             assert!(verdict(&base, id), "{id}: {base:?}");
         }
-        let flips: [Flip<'_>; 6] = [
+        let flips: [Flip<'_>; 7] = [
+            (
+                "buildings/GPS/INS-vs-INS-only",
+                "diff_rmse_3d_open",
+                0.5,
+                [-0.5, 1.5],
+                &["gps_ins_beats_ins_only_in_open_sky"],
+            ),
             (
                 "bridge/GREKF",
                 "rmse_3d",

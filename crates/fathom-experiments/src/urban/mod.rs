@@ -26,6 +26,7 @@
 mod analysis;
 pub mod check;
 mod check_scene;
+mod check_sensors;
 pub mod claims;
 pub mod closed_loop;
 mod cost;

@@ -16,8 +16,8 @@
 
 use fathom_core::RayCaster;
 use fathom_estimators::map_aided::{
-    ErrorVector12, GpsFix, Grekf, Ins12Filter, Matrix12, Mgpmf, ModeSwitch, NavMode, NominalNav,
-    ParticleFilter, RangeBeam,
+    ErrorVector12, GpsFix, GpsReacquire, Grekf, Ins12Filter, Matrix12, Mgpmf, ModeSwitch, NavMode,
+    NominalNav, ParticleFilter, RangeBeam,
 };
 use fathom_ins::ImuIncrement;
 use fathom_ins::local_level::{LocalLevelMechanization, LocalLevelState, LocalTruthSample};
@@ -78,6 +78,9 @@ pub struct NavCounts {
     pub lost_lock: usize,
     /// Times it re-locked (used beams again after a lost lock).
     pub relocks: usize,
+    /// Times a GPS fix re-acquired the position after a run of rejected fixes.
+    #[serde(default)]
+    pub gps_reacquired: usize,
 }
 
 /// One method running (module docs).
@@ -89,6 +92,7 @@ pub struct Nav {
     omega_body: Vector3<f64>,
     filter: Ins12Filter,
     switch: Option<ModeSwitch>,
+    gps: GpsReacquire,
     aider: Aider,
     range_epochs: usize,
     counts: NavCounts,
@@ -198,6 +202,7 @@ impl Nav {
             omega_body: Vector3::zeros(),
             filter,
             switch,
+            gps: GpsReacquire::default(),
             aider,
             range_epochs: 0,
             counts: NavCounts::default(),
@@ -348,12 +353,19 @@ impl Nav {
         let Some(fix) = fix_of(env, &pairs) else {
             return Ok(false);
         };
-        match self
-            .filter
-            .update_gps(&self.nominal(), &fix, &env.filter.gps)
-        {
+        let nominal = self.nominal();
+        // only a fix from as many satellites as GPS/INS is re-entered with may
+        // re-acquire (fewer: likelier the reflections a wrong LOS test let in)
+        let outcome = if pairs.len() >= env.filter.switch.enter_gps_at() {
+            self.gps
+                .update(&mut self.filter, &nominal, &fix, &env.filter.gps)
+        } else {
+            self.filter.update_gps(&nominal, &fix, &env.filter.gps)
+        };
+        match outcome {
             Ok(o) if o.accepted => {
                 self.counts.gps_updates += 1;
+                self.counts.gps_reacquired += usize::from(o.reacquired);
                 Ok(true)
             }
             Ok(_) => {

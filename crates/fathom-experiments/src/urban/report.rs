@@ -291,6 +291,19 @@ fn shadowing_text(c: &super::check::Checked, rows: &[Row]) -> String {
 /// The 95 % band of one epoch's 9-dof NEES (chi-square 2.5 % and 97.5 % quantiles).
 const NEES9_BAND: [f64; 2] = [2.700, 19.023];
 
+/// Where a NEES value lies against a band, in words.
+fn band_words(v: f64, band: [f64; 2], what: &str) -> String {
+    let [lo, hi] = band;
+    let b = format!("{what} [{}, {}]", f(lo, 2), f(hi, 2));
+    if v < lo {
+        format!("below {b} by a factor {} (conservative)", f(lo / v, 1))
+    } else if v > hi {
+        format!("above {b} by a factor {} (over-confident)", f(v / hi, 1))
+    } else {
+        format!("inside {b}")
+    }
+}
+
 /// Mode switching per scenario, from the rows: the thresholds, the switches of every
 /// switching method (mean, fewest), its time in each mode and its lost locks; a method
 /// that never ran map-aided, and a scenario where nothing switched, are said so.
@@ -321,6 +334,24 @@ fn switching_text(c: &super::check::Checked, rows: &[Row]) -> String {
             cell(find(rows, &g, "shadowed_fraction"), 3),
             sw.leave_gps_below(),
         ));
+        let open_diff = find(
+            rows,
+            &format!("{n}/GPS/INS-vs-INS-only"),
+            "diff_rmse_3d_open",
+        );
+        match find(rows, &method_row(n, Method::GpsIns), "rmse_3d_open") {
+            Some(r) => md.push_str(&format!(
+                "  - Open sky (epochs with at least {} satellites in true line of sight): GPS/INS rmse_3d {} m; minus INS-only {} m ({} zero).\n",
+                sw.enter_gps_at(),
+                cell(Some(r), 3),
+                cell(open_diff, 3),
+                relation(open_diff),
+            )),
+            None => md.push_str(&format!(
+                "  - No run of `{n}` has an open-sky epoch (at least {} satellites in true line of sight): no open-sky rows.\n",
+                sw.enter_gps_at(),
+            )),
+        }
         let mut none = true;
         for m in &switching {
             let name = method_row(n, *m);
@@ -336,13 +367,14 @@ fn switching_text(c: &super::check::Checked, rows: &[Row]) -> String {
                 continue;
             }
             md.push_str(&format!(
-                "  - {}: {} switches per run (fewest {} in a run), {} s map-aided and {} s on GPS/INS, {} lost locks per run.\n",
+                "  - {}: {} switches per run (fewest {} in a run), {} s map-aided and {} s on GPS/INS, {} lost locks per run, {} GPS re-acquisitions per run.\n",
                 m.name(),
                 cell(find(rows, &name, "switches"), 2),
                 f(fewest, 0),
                 cell(find(rows, &name, "time_map_aided_s"), 1),
                 cell(find(rows, &name, "time_gps_ins_s"), 1),
                 cell(find(rows, &name, "lost_lock"), 2),
+                cell(find(rows, &name, "gps_reacquired"), 2),
             ));
         }
         if none && !switching.is_empty() {
@@ -368,24 +400,24 @@ fn consistency_text(c: &super::check::Checked, rows: &[Row]) -> String {
             let Some(nees) = find(rows, &name, "nees_mean") else {
                 continue;
             };
-            let where_ = if nees.value < NEES9_BAND[0] {
-                format!(
-                    "below the one-epoch 95 % band [{}, {}] (conservative)",
-                    NEES9_BAND[0], NEES9_BAND[1]
-                )
-            } else if nees.value > NEES9_BAND[1] {
-                format!(
-                    "above the one-epoch 95 % band [{}, {}] by a factor {} (over-confident)",
-                    NEES9_BAND[0],
-                    NEES9_BAND[1],
-                    f(nees.value / NEES9_BAND[1], 1)
-                )
-            } else {
-                format!(
-                    "inside the one-epoch 95 % band [{}, {}]",
-                    NEES9_BAND[0], NEES9_BAND[1]
-                )
+            let where_ = band_words(nees.value, NEES9_BAND, "the one-epoch 95 % band");
+            let runs = c.runs.max(1) as f64;
+            let dof = 9.0 * runs;
+            let mean_band = match (
+                fathom_stats::quantile::chi2_quantile(0.025, dof),
+                fathom_stats::quantile::chi2_quantile(0.975, dof),
+            ) {
+                (Ok(lo), Ok(hi)) => format!(
+                    "; {}",
+                    band_words(
+                        nees.value,
+                        [lo / runs, hi / runs],
+                        &format!("the 95 % band of a mean over {} runs", c.runs)
+                    )
+                ),
+                _ => String::new(),
             };
+            let where_ = format!("{where_}{mean_band}");
             md.push_str(&format!(
                 "- `{name}`: time-averaged 9-state NEES {} (9 expected), {where_}.\n",
                 cell(Some(nees), 2)

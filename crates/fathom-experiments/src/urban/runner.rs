@@ -36,6 +36,8 @@ pub(super) struct Runner<'e> {
     gyro_sum: Vector3<f64>,
     gyro_time: f64,
     nav: Option<Nav>,
+    /// True LOS count of the last GNSS epoch.
+    true_los: Option<usize>,
     /// The evaluation so far.
     pub trace: Trace,
     /// Keep the MGPMF grid of the first map-aided update at or after this time.
@@ -65,6 +67,7 @@ impl<'e> Runner<'e> {
             gyro_sum: Vector3::zeros(),
             gyro_time: 0.0,
             nav: None,
+            true_los: None,
             trace: Trace::default(),
             grid_after: None,
             grid: None,
@@ -86,6 +89,9 @@ impl<'e> Runner<'e> {
         truth: &LocalTruthSample,
         epoch: &SensorEpoch,
     ) -> Result<(), SimError> {
+        if let Some(g) = &epoch.gnss {
+            self.true_los = Some(g.true_los_count());
+        }
         if j <= self.start {
             self.gyro_sum += epoch.imu.delta_theta;
             self.gyro_time += epoch.imu.dt;
@@ -141,8 +147,11 @@ impl<'e> Runner<'e> {
         }
         if (j - self.start).is_multiple_of(self.eval) {
             let map = nav.map_aided();
+            let open = self
+                .true_los
+                .is_some_and(|n| n >= self.env.filter.switch.enter_gps_at());
             self.trace
-                .push(&nav.nominal(), nav.covariance(), truth, map);
+                .push(&nav.nominal(), nav.covariance(), truth, map, open);
         }
         Ok(())
     }

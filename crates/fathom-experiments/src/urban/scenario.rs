@@ -369,6 +369,14 @@ pub struct FilterToml {
     ///
     /// Range: (0, 1).
     pub gps_gate_probability: f64,
+    /// GPS fixes rejected by the gate in a row after which the next fix re-acquires
+    /// the position (the covariance widened by the error the fix shows, as an
+    /// autopilot resets to GNSS): a filter that drifted in the shadow takes the fixes
+    /// again when the sky opens. 0: never (the paper's filter). Absent: 0.
+    ///
+    /// Range: 0 … 1000.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub gps_reacquire_after_rejections: Option<usize>,
     /// Probability that a consistent range passes the GREKF's per-beam gate.
     ///
     /// Range: (0, 1).
@@ -454,6 +462,14 @@ pub struct ParticleToml {
     ///
     /// Range: [0, 10].
     pub roughening: f64,
+    /// The jitter after resampling: `"roughening"` (Gordon et al. 1993, std
+    /// `roughening × spread × N^(-1/3)` per axis) or `"regularized"` (the regularized
+    /// particle filter: a Gaussian kernel on the posterior covariance with the
+    /// optimal bandwidth; `roughening` unused). Absent: `"roughening"`.
+    ///
+    /// Range: `"roughening"` or `"regularized"`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub kernel: Option<String>,
 }
 
 /// `[switch]`: GPS/INS while enough satellites are in line of sight, map-aided

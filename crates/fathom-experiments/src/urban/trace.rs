@@ -40,6 +40,11 @@ pub struct MethodStats {
     pub time_map_aided_s: f64,
     /// Time average of the 9-state NEES.
     pub nees_mean: f64,
+    /// 3-D position RMSE over the open-sky epochs (at least as many satellites in
+    /// true line of sight as GPS/INS needs to be re-entered), m; `None` when the
+    /// flight has no such epoch. Not in [`MethodStats::METRICS`].
+    #[serde(default)]
+    pub rmse_3d_open: Option<f64>,
 }
 
 impl MethodStats {
@@ -91,6 +96,8 @@ pub struct Trace {
     pub nees: Vec<Option<f64>>,
     /// Whether the map-aided mode was active.
     pub map_mode: Vec<bool>,
+    /// Whether the sky was open (true LOS count at least the GPS re-entry count).
+    pub open_sky: Vec<bool>,
     /// Estimated positions, NED, m.
     pub est_pos: Vec<Vector3<f64>>,
     /// Time spent in map-aided mode, s.
@@ -98,8 +105,16 @@ pub struct Trace {
 }
 
 impl Trace {
-    /// Adds the epoch of `nav` (with covariance `cov`) against `truth`.
-    pub fn push(&mut self, nav: &NominalNav, cov: &Matrix12, truth: &LocalTruthSample, map: bool) {
+    /// Adds the epoch of `nav` (with covariance `cov`) against `truth`; `map`: the
+    /// map-aided mode was active, `open_sky`: the sky was open.
+    pub fn push(
+        &mut self,
+        nav: &NominalNav,
+        cov: &Matrix12,
+        truth: &LocalTruthSample,
+        map: bool,
+        open_sky: bool,
+    ) {
         let dp = nav.pos_in_nav - truth.pos_in_nav;
         let dv = nav.vel_in_nav - truth.vel_in_nav;
         let psi = (nav.nav_from_body * truth.nav_from_body.inverse()).scaled_axis();
@@ -125,6 +140,7 @@ impl Trace {
         self.att.push(att);
         self.nees.push(nees);
         self.map_mode.push(map);
+        self.open_sky.push(open_sky);
         self.est_pos.push(nav.pos_in_nav);
     }
 
@@ -165,6 +181,14 @@ impl Trace {
         let e3 = self.err_3d();
         let p95 = fathom_stats::sample::quantile(&e3, 0.95)?;
         let nees: Vec<f64> = self.nees.iter().flatten().copied().collect();
+        let open: Vec<f64> = e3
+            .iter()
+            .zip(&self.open_sky)
+            .filter(|(_, o)| **o)
+            .map(|(e, _)| e * e)
+            .collect();
+        let rmse_3d_open =
+            (!open.is_empty()).then(|| (open.iter().sum::<f64>() / open.len() as f64).sqrt());
         let stats = MethodStats {
             rmse_h: rms(&|i| self.pos[i].xy().norm()),
             rmse_3d: rms(&|i| e3[i]),
@@ -185,8 +209,11 @@ impl Trace {
             } else {
                 nees.iter().sum::<f64>() / nees.len() as f64
             },
+            rmse_3d_open,
         };
-        if stats.values().iter().all(|v| v.is_finite()) {
+        if stats.values().iter().all(|v| v.is_finite())
+            && stats.rmse_3d_open.is_none_or(f64::is_finite)
+        {
             Ok(stats)
         } else {
             Err(SimError::invalid_argument(
@@ -225,7 +252,7 @@ mod tests {
                     * UnitQuaternion::identity(),
                 accel_bias_in_body: Vector3::zeros(),
             };
-            tr.push(&nav, &cov, &t, k == 1);
+            tr.push(&nav, &cov, &t, k == 1, k == 0);
         }
         tr.map_time_s = 1.0;
         let s = tr.stats().unwrap();
@@ -236,6 +263,10 @@ mod tests {
         // identity covariance: NEES = |dp|^2 + |psi|^2
         assert!((s.nees_mean - (12.5 + 0.01)).abs() < 1e-9, "{s:?}");
         assert_eq!(s.time_map_aided_s, 1.0);
+        // only the first epoch (3 m off) was in open sky
+        assert_eq!(s.rmse_3d_open, Some(3.0));
+        tr.open_sky = vec![false, false];
+        assert_eq!(tr.stats().unwrap().rmse_3d_open, None);
         assert!(Trace::default().stats().is_err());
     }
 }
