@@ -28,6 +28,18 @@
 //!   ([`GrekfReport::lock_lost`]), and the position, velocity and attitude covariance
 //!   is multiplied by `relock_inflation` (the gate widens), again after every further
 //!   run of as many, until an update uses a beam again ([`GrekfReport::relocked`]).
+//!   An update with a beam left out by the linearity check does not count towards
+//!   a lost lock (an uncertain pose is not a lost one).
+//! - **Linearity check** (`linearity_sigmas = k > 0`): before the first iteration
+//!   each beam is cast again from the prior pose moved by `± k sigma` along north,
+//!   east (the position σ of `P`) and yaw (the yaw σ); along a plane the range is
+//!   linear in the shift, so the second difference `r+ + r- - 2 r0` is ~0 there and
+//!   large where the span crosses an edge or a gap (a building corner, a cross
+//!   street), where the row of the predicted hit says nothing about the pose the
+//!   filter is unsure of. A beam whose second difference exceeds 3 of its (inflated)
+//!   σ on any axis, or whose shifted ray misses, is left out
+//!   ([`GrekfReport::nonlinear`]): one wrong row there can move the estimate by
+//!   metres and shrink its covariance.
 
 use fathom_core::{Ray, RayCaster, RayHit};
 use nalgebra::{DMatrix, DVector, RowSVector, Vector3};
@@ -51,6 +63,8 @@ pub struct GrekfReport {
     pub grazing: usize,
     /// Beams (and the baro) rejected by the chi-square gate.
     pub gated: usize,
+    /// Beams left out by the linearity check (module docs).
+    pub nonlinear: usize,
     /// Whether the barometer row was used.
     pub baro_used: bool,
     /// NIS of the stacked update (0 when nothing was used).
@@ -81,6 +95,8 @@ pub struct Grekf {
     rays: Vec<Ray>,
     hits: Vec<Option<RayHit>>,
     rows: Vec<Row>,
+    /// Per beam: left out by the linearity check of this update.
+    nonlinear: Vec<bool>,
     /// Consecutive updates without a used beam.
     left_out_run: usize,
     /// Whether the lock is lost (until a beam is used again).
@@ -97,6 +113,7 @@ impl Grekf {
             rays: Vec::new(),
             hits: Vec::new(),
             rows: Vec::new(),
+            nonlinear: Vec::new(),
             left_out_run: 0,
             lost: false,
         }
@@ -152,11 +169,14 @@ impl Grekf {
         self.rows.clear();
         let shift = dx_i - dx0;
         let k2 = self.settings.sigma_inflation.powi(2);
-        for ((beam, ray), hit) in beams.iter().zip(&self.rays).zip(&self.hits) {
+        for (k, ((beam, ray), hit)) in beams.iter().zip(&self.rays).zip(&self.hits).enumerate() {
             let Some(hit) = hit else {
                 report.no_hit += 1;
                 continue;
             };
+            if self.nonlinear.get(k).copied().unwrap_or(false) {
+                continue;
+            }
             let geom = BeamGeometry::from_hit(hit, ray.dir_in_nav);
             if geom.cos_incidence() < range.min_cos_incidence {
                 report.grazing += 1;
@@ -188,6 +208,56 @@ impl Grekf {
         }
     }
 
+    /// The linearity check at the prior pose `est` with covariance `p` (module docs)
+    /// into `self.nonlinear`; returns the count of beams left out and the rays cast.
+    fn check_linearity(
+        &mut self,
+        est: &NominalNav,
+        p: &nalgebra::SMatrix<f64, N_STATES, N_STATES>,
+        beams: &[RangeBeam],
+        caster: &dyn RayCaster,
+    ) -> (usize, usize) {
+        self.nonlinear.clear();
+        self.nonlinear.resize(beams.len(), false);
+        let k = self.settings.linearity_sigmas;
+        if k <= 0.0 {
+            return (0, 0);
+        }
+        let max = self.settings.range.max_range;
+        let c = est.nav_from_body.to_rotation_matrix().into_inner();
+        let o = est.pos_in_nav;
+        let sig = |i: usize| p[(i, i)].max(0.0).sqrt() * k;
+        let (dn, de, dyaw) = (sig(super::POS), sig(super::POS + 1), sig(super::ATT + 2));
+        let range = |o: &Vector3<f64>, d: &Vector3<f64>| caster.cast(o, d, max).map(|h| h.range);
+        let (mut count, mut rays) = (0, 0);
+        for (i, (beam, dir)) in beams.iter().zip(&self.dirs).enumerate() {
+            let d = c * dir;
+            rays += 1;
+            let Some(r0) = range(&o, &d) else {
+                continue;
+            };
+            rays += 6;
+            let tol = 3.0 * self.settings.sigma_inflation * beam.sigma_m;
+            let second = |rp: Option<f64>, rm: Option<f64>| match (rp, rm) {
+                (Some(a), Some(b)) => (a + b - 2.0 * r0).abs() > tol,
+                _ => true,
+            };
+            let yaw = |a: f64| nalgebra::Rotation3::from_axis_angle(&Vector3::z_axis(), a) * d;
+            let bad = second(
+                range(&(o + Vector3::x() * dn), &d),
+                range(&(o - Vector3::x() * dn), &d),
+            ) || second(
+                range(&(o + Vector3::y() * de), &d),
+                range(&(o - Vector3::y() * de), &d),
+            ) || second(range(&o, &yaw(dyaw)), range(&o, &yaw(-dyaw)));
+            if bad {
+                self.nonlinear[i] = true;
+                count += 1;
+            }
+        }
+        (count, rays)
+    }
+
     /// Updates `filter` at its current time with the beams and the optional baro,
     /// seen from `nominal` corrected by the filter's error mean (module docs).
     ///
@@ -213,6 +283,10 @@ impl Grekf {
             beams: beams.len(),
             ..GrekfReport::default()
         };
+        let (nonlinear, check_rays) =
+            self.check_linearity(&nominal.corrected(&dx0), &p, beams, caster);
+        report.nonlinear = nonlinear;
+        report.rays_cast += check_rays;
         let mut dx_i = dx0;
         // the last iteration that used rows: its filter and counts
         let mut post: Option<(Ins12Filter, GrekfReport)> = None;
@@ -263,7 +337,8 @@ impl Grekf {
             return Ok(report);
         }
         report.all_beams_left_out = !beams.is_empty();
-        if beams.is_empty() {
+        // beams left out as nonlinear say the pose is uncertain, not that it is lost
+        if beams.is_empty() || report.nonlinear > 0 {
             *filter = f;
             return Ok(report);
         }
@@ -414,6 +489,60 @@ mod tests {
         let rep = g.update(&mut f2, &est, &[outlier], None, &map).unwrap();
         assert_eq!((rep.used, rep.gated), (0, 1));
         assert_eq!(f2, before);
+    }
+
+    /// The linearity check, in a corner (walls north = 0 and east = 0, pose 4 m and
+    /// 5 m from them, 1 m position σ, 2 σ spans): a beam into the corner changes wall
+    /// within the east span (a kink: left out), a beam square to the north wall is
+    /// linear (kept); the paper's update (k = 0) checks nothing and uses both.
+    #[test]
+    fn linearity_check_leaves_out_beams_across_an_edge() {
+        use crate::map_aided::params::GrekfParams;
+        let map = Planes::corner();
+        let est = nominal(Vector3::new(-4.0, -5.0, -3.0), 0.0);
+        let range_of = |d: Vector3<f64>| map.cast(&est.pos_in_nav, &d, 60.0).unwrap().range;
+        let square = Vector3::x();
+        let into_corner = Vector3::new(1.0, 1.0, 0.0).normalize();
+        let beams = [square, into_corner].map(|d| RangeBeam {
+            dir_in_body: d,
+            range_m: range_of(d),
+            sigma_m: 0.05,
+        });
+        let with = |k: f64| {
+            Grekf::new(
+                GrekfParams {
+                    linearity_sigmas: k,
+                    ..GrekfParams::default()
+                }
+                .check()
+                .unwrap(),
+            )
+        };
+        let mut g = with(2.0);
+        let mut f = filter(3.0);
+        let rep = g.update(&mut f, &est, &beams, None, &map).unwrap();
+        assert_eq!((rep.nonlinear, rep.used), (1, 1), "{rep:?}");
+        assert_eq!(g.nonlinear, vec![false, true]);
+        // 7 rays per beam for the check, one per beam per iteration
+        assert_eq!(rep.rays_cast, 2 * 7 + 2 * rep.iterations);
+        let mut plain = with(0.0);
+        let mut f = filter(3.0);
+        let rep = plain.update(&mut f, &est, &beams, None, &map).unwrap();
+        assert_eq!((rep.nonlinear, rep.used), (0, 2), "{rep:?}");
+        // beams all left out as nonlinear never count towards a lost lock
+        let mut g = GrekfParams {
+            linearity_sigmas: 2.0,
+            lock_loss_updates: 1,
+            ..GrekfParams::default()
+        }
+        .check()
+        .map(Grekf::new)
+        .unwrap();
+        let mut f = filter(3.0);
+        for _ in 0..3 {
+            let r = g.update(&mut f, &est, &beams[1..], None, &map).unwrap();
+            assert!(r.all_beams_left_out && !r.lock_lost && !r.inflated, "{r:?}");
+        }
     }
 
     /// Issue 33: an update with every beam gated is no map update; after

@@ -275,6 +275,12 @@ pub struct GrekfParams {
     pub lock_loss_updates: usize,
     /// The covariance factor of a lost lock (> 1). Default 4.
     pub relock_inflation: f64,
+    /// The linearity check ([`super::grekf`] docs): each beam is cast again from the
+    /// prior pose shifted by ± this many standard deviations along north, east and
+    /// yaw; a beam whose range is not linear over that span (a second difference
+    /// beyond 3 of its σ, or a ray that misses) is left out. 0: no check (the
+    /// paper's update). Default 0.
+    pub linearity_sigmas: f64,
 }
 
 impl Default for GrekfParams {
@@ -285,6 +291,7 @@ impl Default for GrekfParams {
             sigma_inflation: 1.0,
             lock_loss_updates: 5,
             relock_inflation: 4.0,
+            linearity_sigmas: 0.0,
         }
     }
 }
@@ -297,6 +304,7 @@ pub struct GrekfSettings {
     pub(crate) sigma_inflation: f64,
     pub(crate) lock_loss_updates: usize,
     pub(crate) relock_inflation: f64,
+    pub(crate) linearity_sigmas: f64,
 }
 
 impl GrekfSettings {
@@ -324,6 +332,11 @@ impl GrekfSettings {
     pub fn relock_inflation(&self) -> f64 {
         self.relock_inflation
     }
+
+    /// The span of the linearity check in standard deviations (0: none).
+    pub fn linearity_sigmas(&self) -> f64 {
+        self.linearity_sigmas
+    }
 }
 
 impl From<RangeSettings> for GrekfSettings {
@@ -335,6 +348,7 @@ impl From<RangeSettings> for GrekfSettings {
             sigma_inflation: 1.0,
             lock_loss_updates: 0,
             relock_inflation: 4.0,
+            linearity_sigmas: 0.0,
         }
     }
 }
@@ -361,12 +375,17 @@ impl GrekfParams {
         if !(f.is_finite() && f > 1.0) {
             return Err(invalid("grekf.relock_inflation", f, "finite and > 1"));
         }
+        let l = self.linearity_sigmas;
+        if !(l.is_finite() && (0.0..=10.0).contains(&l)) {
+            return Err(invalid("grekf.linearity_sigmas", l, "0 ... 10"));
+        }
         Ok(GrekfSettings {
             range: self.range.check_as("grekf.range")?,
             iterations: self.iterations,
             sigma_inflation: k,
             lock_loss_updates: self.lock_loss_updates,
             relock_inflation: f,
+            linearity_sigmas: l,
         })
     }
 }

@@ -276,6 +276,7 @@ fn per_run_csv(c: &Checked, main: &[KeptRun], out: &mut Analysis) -> Result<(), 
         "lost_lock",
         "relocks",
         "gps_reacquired",
+        "beams_nonlinear",
     ]);
     let mut records = Vec::new();
     for (i, run) in main.iter().enumerate() {
@@ -298,6 +299,7 @@ fn per_run_csv(c: &Checked, main: &[KeptRun], out: &mut Analysis) -> Result<(), 
                         n.lost_lock,
                         n.relocks,
                         n.gps_reacquired,
+                        n.beams_nonlinear,
                     ]
                     .map(|x| CsvCell::Int(x as i64)),
                 );

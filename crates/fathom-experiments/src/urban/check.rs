@@ -501,6 +501,13 @@ impl UrbanScenario {
                 0..=1000,
             )?,
             relock_inflation: f.relock_inflation.unwrap_or(4.0),
+            linearity_sigmas: require_in_range(
+                file,
+                "filter.grekf_linearity_sigmas",
+                f.grekf_linearity_sigmas.unwrap_or(0.0),
+                0.0,
+                10.0,
+            )?,
         };
         if let Some(k) = f.relock_inflation
             && !(k > 1.0 && k <= 100.0)

@@ -81,6 +81,9 @@ pub struct NavCounts {
     /// Times a GPS fix re-acquired the position after a run of rejected fixes.
     #[serde(default)]
     pub gps_reacquired: usize,
+    /// Beams the GREKF's linearity check left out (all updates).
+    #[serde(default)]
+    pub beams_nonlinear: usize,
 }
 
 /// One method running (module docs).
@@ -412,6 +415,7 @@ impl Nav {
             Aider::Grekf(g) => {
                 match g.update(&mut self.filter, &nominal, &self.beams, baro, env.map) {
                     Ok(rep) => {
+                        self.counts.beams_nonlinear += rep.nonlinear;
                         self.counts.lost_lock += usize::from(rep.lock_lost);
                         self.counts.relocks += usize::from(rep.relocked);
                         if rep.all_beams_left_out {

@@ -413,6 +413,14 @@ pub struct FilterToml {
     /// Range: (1, 100].
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub relock_inflation: Option<f64>,
+    /// The GREKF's linearity check: each beam is cast again from the prior pose
+    /// moved by ± this many standard deviations along north, east and yaw, and left
+    /// out where its range is not linear over that span (a corner or a gap within
+    /// the filter's uncertainty). 0: no check (the paper's update). Absent: 0.
+    ///
+    /// Range: 0 … 10.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub grekf_linearity_sigmas: Option<f64>,
 }
 
 /// `[mgpmf]`: grid, likelihood and rate of the point-mass filter (section 2.3).
