@@ -35,10 +35,11 @@ fn replay_job(
     dir: &Path,
     out: &Path,
 ) -> Result<ExperimentResult, SimError> {
-    let text = exp.preset().replace(
-        "dir = \"my-log\"",
-        &format!("dir = {:?}", dir.to_str().unwrap()),
-    );
+    let preset_dir = format!("dir = \"fathom-out/{}-log\"", exp.name());
+    assert!(exp.preset().contains(&preset_dir), "{}", exp.name());
+    let text = exp
+        .preset()
+        .replace(&preset_dir, &format!("dir = {:?}", dir.to_str().unwrap()));
     let job = Job {
         text: &text,
         file: "preset",

@@ -53,7 +53,15 @@ fn example_logs_replay_with_and_without_truth() {
     let root = scratch("own-logs-replay");
     ok(
         &root,
-        &["log", "example", "range-beacon", "rb", "--duration", "120"],
+        &[
+            "log",
+            "example",
+            "range-beacon",
+            "--out",
+            "rb",
+            "--duration",
+            "120",
+        ],
     );
     ok(
         &root,
@@ -61,6 +69,7 @@ fn example_logs_replay_with_and_without_truth() {
             "log",
             "example",
             "range-beacon",
+            "--out",
             "rb-nt",
             "--duration",
             "120",
@@ -69,7 +78,15 @@ fn example_logs_replay_with_and_without_truth() {
     );
     ok(
         &root,
-        &["log", "example", "ins-dvl", "ins", "--duration", "60"],
+        &[
+            "log",
+            "example",
+            "ins-dvl",
+            "--out",
+            "ins",
+            "--duration",
+            "60",
+        ],
     );
     ok(
         &root,
@@ -77,6 +94,7 @@ fn example_logs_replay_with_and_without_truth() {
             "log",
             "example",
             "ins-dvl",
+            "--out",
             "ins-nt",
             "--duration",
             "60",
@@ -88,7 +106,7 @@ fn example_logs_replay_with_and_without_truth() {
     // Writing over an existing log is refused.
     usage_error(
         &root,
-        &["log", "example", "ins-dvl", "ins"],
+        &["log", "example", "ins-dvl", "--out", "ins"],
         &["exists already"],
     );
 
@@ -193,7 +211,15 @@ fn corrupted_logs_name_file_line_and_column() {
     let root = scratch("own-logs-bad");
     ok(
         &root,
-        &["log", "example", "range-beacon", "good", "--duration", "30"],
+        &[
+            "log",
+            "example",
+            "range-beacon",
+            "--out",
+            "good",
+            "--duration",
+            "30",
+        ],
     );
     let ranges = read(&root.join("good"), "ranges.csv");
     let copy = |name: &str, file: &str, text: &str| {
@@ -251,7 +277,7 @@ fn corrupted_logs_name_file_line_and_column() {
         usage_error(&root, &["log", "check", dir], want);
     }
     // Nothing was written for a refused log.
-    assert!(!root.join("range-beacon-replay").exists());
+    assert!(!root.join("fathom-out/range-beacon-replay").exists());
     // Negative control: the untouched copy replays.
     ok(&root, &["replay", "range-beacon", "good"]);
 }
@@ -271,7 +297,7 @@ fn missing_plaza_folder_is_an_error_not_an_empty_report() {
     );
     usage_error(
         &root,
-        &["log", "from-plaza", "no/such/plaza", "x"],
+        &["log", "from-plaza", "no/such/plaza", "--out", "x"],
         &["no/such/plaza"],
     );
 }
@@ -281,7 +307,7 @@ fn plaza_through_the_layout_gives_the_plaza_numbers() {
     let plaza = repo_root().join("data/plaza1");
     let root = scratch("own-logs-plaza");
     let p = plaza.display().to_string();
-    ok(&root, &["log", "from-plaza", &p, "p-csv"]);
+    ok(&root, &["log", "from-plaza", &p, "--out", "p-csv"]);
     let config = repo_root().join("scenarios/range-beacon-plaza.toml");
     let own = ok(
         &root,
@@ -334,7 +360,15 @@ fn own_log_replay_keeps_a_users_file_in_out() {
     let root = scratch("own-logs-out");
     ok(
         &root,
-        &["log", "example", "range-beacon", "rb", "--duration", "60"],
+        &[
+            "log",
+            "example",
+            "range-beacon",
+            "--out",
+            "rb",
+            "--duration",
+            "60",
+        ],
     );
     std::fs::create_dir_all(root.join("o")).unwrap();
     std::fs::write(root.join("o/notes.md"), "my own notes").unwrap();
@@ -415,11 +449,27 @@ fn every_replay_writes_the_outputs_of_a_run() {
     let root = scratch("own-logs-outputs");
     ok(
         &root,
-        &["log", "example", "range-beacon", "rb", "--duration", "60"],
+        &[
+            "log",
+            "example",
+            "range-beacon",
+            "--out",
+            "rb",
+            "--duration",
+            "60",
+        ],
     );
     ok(
         &root,
-        &["log", "example", "ins-dvl", "ins", "--duration", "60"],
+        &[
+            "log",
+            "example",
+            "ins-dvl",
+            "--out",
+            "ins",
+            "--duration",
+            "60",
+        ],
     );
     let plaza = repo_root().join("data/plaza1").display().to_string();
     let common = ["estimate_vs_truth.svg", "error_3sigma.svg", "nis.svg"];

@@ -319,7 +319,8 @@ fn methods_select_the_methods_run(dir: &Path, full: &[serde_json::Value]) {
 }
 
 /// Path through the building, a waypoint outside the mesh, an OBJ without faces, a
-/// missing file: exit 2 and one line naming the file and the problem.
+/// missing file: exit 2 and one line naming the file and the problem, from `run` and
+/// from `check` alike.
 #[test]
 fn bad_user_worlds_are_one_line_usage_errors() {
     let dir = scratch("urban-obj-bad");
@@ -364,5 +365,12 @@ fn bad_user_worlds_are_one_line_usage_errors() {
             "{file}: {msg}"
         );
         assert!(msg.contains(file), "{file}: {msg}");
+        // `check` loads the world as `run` does: the same exit code and message.
+        let checked = fathom(&dir, &["check", file]);
+        assert_eq!(
+            (checked.code, checked.stderr.trim()),
+            (2, msg),
+            "{file}: check {checked:?}"
+        );
     }
 }
