@@ -109,23 +109,36 @@ pub(crate) fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
         LogCmd::Example(a) => {
             let kind = a.kind.kind();
             let dir = a.out.clone().unwrap_or_else(|| log_out(kind.name()));
-            let files = match kind {
-                LogKind::RangeBeacon => range_beacon_example(a.duration, a.seed, !a.no_truth)
-                    .map_err(|e| usage(&e))?
-                    .to_files(),
-                LogKind::InsDvl => ins_dvl_example(a.duration, a.seed, !a.no_truth)
-                    .map_err(|e| usage(&e))?
-                    .to_files(),
+            let (files, outliers) = match kind {
+                LogKind::RangeBeacon => {
+                    let ex = range_beacon_example(a.duration, a.seed, !a.no_truth)
+                        .map_err(|e| usage(&e))?;
+                    let note = format!(
+                        "; {} range outlier{} of +{} m injected",
+                        ex.outliers,
+                        if ex.outliers == 1 { "" } else { "s" },
+                        ex.outlier_m
+                    );
+                    (ex.log.to_files(), note)
+                }
+                LogKind::InsDvl => (
+                    ins_dvl_example(a.duration, a.seed, !a.no_truth)
+                        .map_err(|e| usage(&e))?
+                        .to_files(),
+                    String::new(),
+                ),
             };
             let about = format!(
-                "simulated example ({} s, seed {}{}) written by `fathom log example`",
+                "simulated example ({} s, seed {}{}{outliers}) written by `fathom log \
+                 example` with the noise of the built-in scenarios/{}.toml",
                 a.duration,
                 a.seed,
-                if a.no_truth { ", no truth" } else { "" }
+                if a.no_truth { ", no truth" } else { "" },
+                kind.name()
             );
             write_log(&dir, &Manifest::new(kind, about), &files).map_err(|e| usage(&e))?;
             Ok(format!(
-                "wrote the {} log {} ({}); replay it with `fathom replay {} {}`\n",
+                "wrote the {} log {} ({}{outliers}); replay it with `fathom replay {} {}`\n",
                 kind.name(),
                 dir.display(),
                 files.iter().map(|f| f.0).collect::<Vec<_>>().join(", "),

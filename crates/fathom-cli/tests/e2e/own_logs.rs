@@ -51,18 +51,15 @@ fn usage_error(dir: &Path, args: &[&str], want: &[&str]) {
 #[test]
 fn example_logs_replay_with_and_without_truth() {
     let root = scratch("own-logs-replay");
-    ok(
-        &root,
-        &[
-            "log",
-            "example",
-            "range-beacon",
-            "--out",
-            "rb",
-            "--duration",
-            "120",
-        ],
-    );
+    // The default example (300 s): it says how many range outliers it injected.
+    let wrote = ok(&root, &["log", "example", "range-beacon", "--out", "rb"]);
+    let injected: f64 = wrote
+        .split(" range outliers of +")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no outlier count in: {wrote}"));
+    assert!(injected > 0.0, "{wrote}");
     ok(
         &root,
         &[
@@ -126,7 +123,8 @@ fn example_logs_replay_with_and_without_truth() {
         report.contains("Position error against `truth.csv` (3D, m)"),
         "{report}"
     );
-    // The filters beat dead reckoning on the example (DVL with a 1 % scale error).
+    // The filters beat dead reckoning on the example (the heading's random walk lets
+    // dead reckoning drift) and reject exactly the injected outliers.
     let s = summary(&root.join("o-rb"));
     assert_eq!(s.experiment, "range-beacon");
     assert_eq!(s.extra["error"], "3D");
@@ -138,6 +136,12 @@ fn example_logs_replay_with_and_without_truth() {
             mean(m),
             mean("DR")
         );
+        assert_eq!(s.row(m, "rejected").unwrap().value, injected, "{m}");
+    }
+    // Simulated with the noise of the built-in settings: every filter is consistent.
+    assert!(!s.claims.is_empty());
+    for c in &s.claims {
+        assert!(c.holds, "{}: {}", c.id, c.detail);
     }
     let est = read(&root.join("o-rb"), "estimates.csv");
     assert!(est.starts_with("time[s],true_north[m],true_east[m],true_down[m],DR_north[m]"));
