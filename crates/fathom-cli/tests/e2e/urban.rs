@@ -164,11 +164,16 @@ fn preset_rows_claims_figures_and_report() {
     }
 }
 
-/// The preset's shared sections with `body` as the only scenario (no ablations).
+/// The preset's shared sections with `body` as the only scenario and no
+/// `[ablations]` table (optional in a user's file).
 fn user_scenario(body: &str) -> String {
     let text = preset("urban.toml").replace("runs = 50 ", "runs = 2 ");
     let head = text.split("[[scenarios]]").next().unwrap();
-    format!("{head}\n{body}\n[ablations]\nruns = 2\n")
+    assert!(
+        !head.contains("[ablations]"),
+        "the ablations follow the scenarios"
+    );
+    format!("{head}\n{body}\n")
 }
 
 fn block(world: &str, waypoints: &str) -> String {
