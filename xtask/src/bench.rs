@@ -4,7 +4,7 @@
 //! per benchmark) and prints a table with the performance targets of
 //! `docs/performance.md` (with the ns per ray cast inside each map-aided update:
 //! `cargo xtask bench map_aided`). `--mesh FILE` hands an OBJ mesh (NED metres, as
-//! `shared/bench/raycast_ref.py` writes it) to the ray-casting bench through the
+//! the Embree reference script of docs/performance.md writes it) to the ray-casting bench through the
 //! `FATHOM_RAYCAST_MESH` environment variable (`raycast/mesh`). The target directory
 //! is `CARGO_TARGET_DIR` when set (where cargo and criterion write), else `target/`.
 //! `--compare` also times FilterPy's `KalmanFilter` on the identical 6-state /
@@ -234,7 +234,7 @@ fn targets(results: &[BenchResult]) -> String {
         if let Some(r) = find(results, name) {
             s.push_str(&format!(
                 "  {what:<28} {:>10} per ray (fastest sample {}); Embree: run \
-                 shared/bench/raycast_ref.py on the same mesh (docs/performance.md)\n",
+                 the reference script on the same mesh (docs/performance.md)\n",
                 fmt_ns(r.ns_per_iter),
                 fmt_ns(r.min_ns_per_iter),
             ));

@@ -1,7 +1,7 @@
 //! Project automation. `cargo xtask codegen` regenerates `docs/scenarios.md`;
 //! `cargo xtask paper [--only NAME] [--runs N] [--threads T] [--out DIR] [--force]`
-//! reproduces the papers' experiments into `target/paper/` (see
-//! `shared/spec/README.md`, "Output contract"); `cargo xtask bench [--compare]
+//! reproduces the papers' experiments into `target/paper/` (README, "Quick start":
+//! the output contract); `cargo xtask bench [--compare]
 //! [FILTER]` runs the benchmarks into `target/bench/bench.json` (see
 //! `docs/performance.md`).
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::{Context, anyhow};
 use clap::{Args, Subcommand};
 use fathom_experiments::registry;
-use fathom_sim::driver::campaign::{merge, run_assessed_shard, slurm_script};
+use fathom_sim::driver::campaign::{merge, read_manifest, run_assessed_shard, slurm_script};
 use fathom_sim::experiment::{Environment, Job, Shard};
 use fathom_sim::user_run::{assess_scenario, check_command};
 
@@ -16,9 +16,10 @@ pub(crate) struct MergeArgs {
     /// Shard folders (each with `manifest.json`), in any order.
     #[arg(required = true)]
     pub(crate) dirs: Vec<PathBuf>,
-    /// Output folder (replaced only once the merge is complete).
+    /// Output folder, replaced only once the merge is complete (default
+    /// `fathom-out/<experiment>`, where a single run writes).
     #[arg(long, value_name = "DIR")]
-    pub(crate) out: PathBuf,
+    pub(crate) out: Option<PathBuf>,
     /// Worker threads of the analysis (results do not depend on it).
     #[arg(long, value_name = "T")]
     pub(crate) threads: Option<usize>,
@@ -74,7 +75,7 @@ pub(crate) fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Fail
     };
     let (exp, assessed) = assess_scenario(&job, &registry).map_err(failure)?;
     let out = args.out.clone().unwrap_or_else(|| {
-        PathBuf::from("fathom-out").join(format!(
+        crate::default_out(&format!(
             "{}-shard-{}-of-{}",
             exp.name(),
             shard.index,
@@ -107,12 +108,22 @@ pub(crate) fn merge_cmd(args: &MergeArgs) -> Result<String, Failure> {
     let base_dir = std::env::current_dir()
         .context("cannot read the current directory")
         .map_err(Failure::Run)?;
+    let out = match &args.out {
+        Some(out) => out.clone(),
+        None => {
+            let first = args
+                .dirs
+                .first()
+                .ok_or_else(|| Failure::Usage(anyhow!("fathom merge: give the shard folders")))?;
+            crate::default_out(&read_manifest(first).map_err(failure)?.experiment)
+        }
+    };
     let (result, m) = merge(
         &registry(),
         &args.dirs,
         args.threads,
         &base_dir,
-        &args.out,
+        &out,
         args.force,
     )
     .map_err(failure)?;

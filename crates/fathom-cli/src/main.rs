@@ -5,13 +5,24 @@
 //!            [--max-memory-gb G] [--max-hours H]
 //! fathom check <scenario.toml> [--max-memory-gb G] [--max-hours H]
 //! fathom list
-//! fathom replay plaza <DIR> [--config FILE] [--out DIR] [--force]
-//! fathom replay range-beacon|ins-dvl <DIR> [--config FILE] [--out DIR] [--force]
-//! fathom log example range-beacon|ins-dvl <DIR> [--duration S] [--seed S] [--no-truth]
-//! fathom log from-plaza <PLAZA_DIR> <DIR>
+//! fathom replay plaza [DIR] [--config FILE] [--out DIR] [--force]
+//! fathom replay range-beacon|ins-dvl [DIR] [--config FILE] [--out DIR] [--force]
+//! fathom log example range-beacon|ins-dvl [--out DIR] [--duration S] [--seed S] [--no-truth]
+//! fathom log from-plaza [PLAZA_DIR] [--out DIR]
 //! fathom log check <DIR>
-//! fathom merge <SHARD DIRS...> --out DIR [--force]
+//! fathom merge <SHARD DIRS...> [--out DIR] [--force]
+//! fathom pils FILE | pils sim|nav|offline|compare FILE [--out DIR]
 //! ```
+//!
+//! **Where outputs go**, for every command: `fathom-out/<name>/` in the current
+//! directory unless `--out DIR` ([`OUT_ROOT`]): `run` -> `fathom-out/<experiment>`
+//! (`--shard K/M`: `<experiment>-shard-K-of-M`), `merge` -> `fathom-out/<experiment>`,
+//! `replay <kind>` -> `fathom-out/<kind>-replay`, `log example <kind>` ->
+//! `fathom-out/<kind>-log`, `log from-plaza` -> `fathom-out/plaza-log`, `pils` ->
+//! `fathom-out/pils`, `pils sim|nav|offline|compare` -> `fathom-out/pils-<side>`.
+//! A replay without `DIR` reads its settings' `[data] dir` (found in the current
+//! directory or beside one of its ancestors): `data/plaza1` for `plaza`,
+//! `fathom-out/<kind>-log` for one's own logs.
 //!
 //! `run` runs any scenario file of a registered experiment (the file's top-level
 //! `experiment` key names it) and writes the experiment's outputs plus the scenario,
@@ -35,24 +46,27 @@
 //! replacing only fathom's own. Where `--out` cannot be written is found before
 //! computing too.
 //!
-//! `check` parses and validates a scenario without running it and estimates its cost
-//! (samples, memory, run time); `check` and `run` refuse a scenario beyond the
+//! `check` parses and validates any settings file fathom reads (a scenario of an
+//! experiment, the settings of a replay, PILS settings: the kind comes from the
+//! `experiment` key) without running it, loads what a run would load (the world and
+//! its waypoints, a data folder, the PILS flight), so that a file `check` accepts is
+//! one `run` starts, and estimates its cost (samples, memory, run time); `check` and `run` refuse a scenario beyond the
 //! limits (`--max-memory-gb`, default 4; `--max-hours`, default 24) naming the key
-//! that drives the cost. `list` shows the experiments, estimators, update schemes and
-//! sensors.
+//! that drives the cost. `list` shows the experiments and replays with the names their
+//! files accept, then the estimators, update schemes and sensor models.
 //!
 //! `run` and `check` also take the settings file of a replay of one's own log
 //! (`experiment = "range-beacon"` or `"ins-dvl"`, its `[data] dir` naming the log).
 //!
-//! `replay plaza|range-beacon|ins-dvl DIR` replays estimators on recorded data, a job
-//! of the same driver as `run` (`run_info.json` says `command: "replay"`), with the
+//! `replay plaza|range-beacon|ins-dvl [DIR]` replays estimators on recorded data, a
+//! job of the same driver as `run` (`run_info.json` says `command: "replay"`), with the
 //! settings of `--config` or, by default, the built-in `scenarios/plaza.toml`,
 //! `scenarios/range-beacon.toml` or `scenarios/ins-dvl.toml`, whose `[data] dir` is
-//! replaced by `DIR`. `DIR` holds one CMU Plaza data set in its native files
+//! replaced by `DIR` when given. `DIR` holds one CMU Plaza data set in its native files
 //! (`*_DR.txt`, `*_TD.txt`, `*_.mat`: dead reckoning and the EKF under AS, SC and SI
 //! plus ablations) or one's own log in fathom's CSV layout (`docs/own-data.md`, the
 //! methods of the settings' `[[methods]]` list). Every replay writes, into `--out`
-//! (default `plaza-replay` / `<kind>-replay`), what `run` writes: `summary.json`
+//! (default `fathom-out/<kind>-replay`), what `run` writes: `summary.json`
 //! (rows `method, metric, value` of the shared format), `report.md` (every row with
 //! its unit, the claims or checks, notes, links to the figures), the settings as
 //! given and resolved (`scenario.toml`, `scenario.resolved.toml`: `fathom run
@@ -73,6 +87,7 @@
 //! whole cause chain, naming the key or the option.
 
 mod campaign;
+mod list;
 mod own_logs;
 mod pils;
 mod pils_compare;
@@ -91,7 +106,7 @@ use replay::{ReplayData, replay_cmd};
 
 use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
-use fathom_experiments::{jobs, registry};
+use fathom_experiments::jobs;
 use fathom_sim::cost::Limits;
 use fathom_sim::driver::{console_claims, console_rows, console_setup};
 use fathom_sim::experiment::Shard;
@@ -106,7 +121,11 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 #[command(
     name = "fathom",
     version,
-    about = "Run, compare and evaluate navigation estimators on recorded data."
+    about = "Run, compare and evaluate navigation estimators on recorded data.",
+    after_help = "Outputs: every command writes into fathom-out/<name>/ of the current \
+                  directory unless --out DIR (run: fathom-out/<experiment>, merge: \
+                  fathom-out/<experiment>, replay: fathom-out/<kind>-replay, log: \
+                  fathom-out/<kind>-log, pils: fathom-out/pils[-<side>])."
 )]
 struct Cli {
     #[command(subcommand)]
@@ -121,9 +140,11 @@ enum Command {
     Replay(ReplayData),
     /// Run a scenario file (copy one from `scenarios/`, change numbers, run it).
     Run(RunArgs),
-    /// Parse and validate a scenario file without running it; print the resolved file.
+    /// Validate any settings file fathom reads (a scenario, replay settings, PILS
+    /// settings) and load what a run would load, without running; print it resolved.
     Check(CheckArgs),
-    /// List the experiments, estimators, update schemes and sensors.
+    /// List the experiments and replays with the names their files accept, the
+    /// estimators, update schemes and sensor models.
     List,
     /// Logs in fathom's CSV layout (docs/own-data.md): examples, conversion, checks.
     #[command(subcommand)]
@@ -206,7 +227,8 @@ fn parse_shard(text: &str) -> Result<Shard, String> {
 
 #[derive(Debug, Args)]
 struct CheckArgs {
-    /// Scenario file.
+    /// Settings file: a scenario, replay settings or PILS settings (the kind is read
+    /// from its `experiment` key).
     scenario: PathBuf,
     /// Print only the OK line, not the resolved scenario.
     #[arg(long)]
@@ -283,9 +305,6 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         info.fathom_version
     );
     text.push_str(&console_setup(&result));
-    if let Some(reason) = &result.skipped {
-        text.push_str(&format!("skipped: {reason}\n"));
-    }
     text.push_str(&console_rows(&result));
     text.push_str(&console_claims(&result));
     text.push_str(&format!(
@@ -294,6 +313,14 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         result.figures.len()
     ));
     Ok(text)
+}
+
+/// Where every command writes by default: `fathom-out/<name>` in the current directory.
+pub(crate) const OUT_ROOT: &str = "fathom-out";
+
+/// The default output folder `fathom-out/<name>` of a command.
+pub(crate) fn default_out(name: &str) -> PathBuf {
+    PathBuf::from(OUT_ROOT).join(name)
 }
 
 /// Prints `text` on standard output at once (also into a pipe).
@@ -378,7 +405,21 @@ fn progress_hook(bar: &ProgressBar, draw: bool) -> Progress {
     })
 }
 
+/// The top-level `experiment` key of a settings file, if it is readable TOML with one.
+fn experiment_key(path: &std::path::Path) -> Option<String> {
+    let text = std::fs::read_to_string(path).ok()?;
+    let table: toml::Table = toml::from_str(&text).ok()?;
+    Some(table.get("experiment")?.as_str()?.to_string())
+}
+
+/// `fathom check FILE`: the kind of file from its `experiment` key: PILS settings
+/// (`"pils"`) are checked and flown as `fathom pils` does before any socket; every
+/// other file is a scenario or replay settings file of [`jobs`], checked and prepared
+/// as `fathom run` does.
 fn check_cmd(args: &CheckArgs) -> Result<String, Failure> {
+    if experiment_key(&args.scenario).as_deref() == Some(pils::EXPERIMENT) {
+        return pils::check(&args.scenario, args.quiet);
+    }
     let registry = jobs();
     let limits = args.limits.limits()?;
     let resolved = check_scenario_with(&args.scenario, &registry, &limits)
@@ -393,114 +434,13 @@ fn check_cmd(args: &CheckArgs) -> Result<String, Failure> {
     ))
 }
 
-fn list_cmd() -> String {
-    let mut text = String::from("experiments (fathom run <scenario>; presets in scenarios/):\n");
-    for e in registry() {
-        text.push_str(&format!(
-            "  {:<8} {} (seed {}; preset {})\n",
-            e.name(),
-            e.about(),
-            e.seed_doc(),
-            e.default_scenario()
-        ));
-        if !e.methods().is_empty() {
-            text.push_str(&format!(
-                "  {:<8} methods = [{}] (default: all)\n",
-                "",
-                e.methods()
-                    .iter()
-                    .map(|m| format!("{m:?}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ));
-        }
-    }
-    text.push_str("estimators:\n");
-    for (name, doc) in ESTIMATORS {
-        text.push_str(&format!("  {name:<16} {doc}\n"));
-    }
-    text.push_str("update schemes (beacons, plaza):\n");
-    for (name, doc) in SCHEMES {
-        text.push_str(&format!("  {name:<16} {doc}\n"));
-    }
-    text.push_str(
-        "own logs (fathom replay <kind> <dir>; docs/own-data.md; methods chosen in the \
-         settings' [[methods]] list):\n",
-    );
-    text.push_str(
-        "  range-beacon     filter = \"dead-reckoning\" | \"ekf\" with scheme = \"AS\" | \"SC\" | \"SI\", \
-         calibration = \"none\" | \"offset\" | \"affine\", outliers = \"robust\" | \"gate\"\n",
-    );
-    text.push_str(
-        "  ins-dvl          filter = \"pins\" | \"ins-dvl\" | \"vkf\" | \"eskf\" (gate_probability for a gated filter)\n",
-    );
-    text.push_str("sensors:\n");
-    for (name, doc) in SENSORS {
-        text.push_str(&format!("  {name:<16} {doc}\n"));
-    }
-    text
-}
-
-/// Estimators available in the experiments (static list).
-const ESTIMATORS: &[(&str, &str)] = &[
-    (
-        "kf",
-        "linear Kalman filter, Joseph-form update (fathom-estimators)",
-    ),
-    (
-        "ekf",
-        "extended Kalman filter for range-beacon localization (beacons, plaza)",
-    ),
-    (
-        "ins-error-kf",
-        "15-state INS error-state filter (fusion, vkf: INS-DVL, ESKF)",
-    ),
-    ("vkf", "velocity filter switching DVL / RPM aiding (vkf)"),
-    (
-        "information-fusion",
-        "track fusion in information form, eq. 10 (fusion)",
-    ),
-    (
-        "dead-reckoning",
-        "DVL / odometry dead reckoning without corrections",
-    ),
-];
-
-/// Measurement update schemes (static list).
-const SCHEMES: &[(&str, &str)] = &[
-    (
-        "AS",
-        "asynchronous: each measurement updates at its own time stamp",
-    ),
-    ("SC", "synchronous collective: one stacked update per epoch"),
-    (
-        "SI",
-        "synchronous individual: sequential scalar updates per epoch",
-    ),
-];
-
-/// Simulated sensor models (static list).
-const SENSORS: &[(&str, &str)] = &[
-    ("dvl", "Doppler velocity log (body velocity, bottom lock)"),
-    ("ahrs", "attitude / rate sensor"),
-    (
-        "imu",
-        "strapdown IMU from truth (accelerometers, gyros, biases)",
-    ),
-    ("range", "acoustic / radio range to a beacon"),
-    ("depth", "pressure depth gauge"),
-    ("echo-sounder", "altitude above the sea floor"),
-    ("rpm", "propeller RPM speed log"),
-    ("wheel-odometry", "recorded odometry (plaza replay)"),
-];
-
 fn run(cli: &Cli) -> Result<String, Failure> {
     match &cli.command {
         Command::Replay(cmd) => replay_cmd(cmd),
         Command::Log(cmd) => log_cmd(cmd),
         Command::Run(args) => run_scenario_cmd(args),
         Command::Check(args) => check_cmd(args),
-        Command::List => Ok(list_cmd()),
+        Command::List => Ok(list::list_cmd()),
         Command::Merge(args) => merge_cmd(args),
         Command::Campaign(kind) => campaign_cmd(kind),
         Command::Pils(args) => pils::pils_cmd(args),
@@ -573,14 +513,15 @@ mod tests {
         let Command::Replay(ReplayData::Plaza(a)) = cli.command else {
             panic!("not replay")
         };
-        assert_eq!(a.dir, PathBuf::from("data/p1"));
+        assert_eq!(a.dir, Some(PathBuf::from("data/p1")));
         assert_eq!(a.config, Some(PathBuf::from("c.toml")));
-        assert_eq!(a.out, PathBuf::from("o"));
-        let cli = Cli::try_parse_from(["fathom", "replay", "plaza", "d"]).unwrap();
+        assert_eq!(a.out, Some(PathBuf::from("o")));
+        // Without a folder: the settings' `[data] dir` (data/plaza1), default output.
+        let cli = Cli::try_parse_from(["fathom", "replay", "plaza"]).unwrap();
         let Command::Replay(ReplayData::Plaza(a)) = cli.command else {
             panic!("not replay")
         };
-        assert_eq!(a.out, PathBuf::from("plaza-replay"));
+        assert_eq!((a.dir, a.out), (None, None));
         assert!(a.config.is_none());
     }
 
@@ -626,7 +567,7 @@ mod tests {
             Cli::try_parse_from(["fathom", "list"]).unwrap().command,
             Command::List
         ));
-        let l = list_cmd();
+        let l = list::list_cmd();
         for name in [
             "fusion",
             "noise",
@@ -647,7 +588,6 @@ mod tests {
         for args in [
             vec!["fathom"],
             vec!["fathom", "replay"],
-            vec!["fathom", "replay", "plaza"],
             vec!["fathom", "replay", "other", "d"],
             vec!["fathom", "replay", "plaza", "d", "--fast"],
         ] {

@@ -11,7 +11,7 @@ use fathom_data::layout::range_beacon::RangeBeaconLog;
 use fathom_data::layout::{FileSet, LogKind, Manifest, write_log};
 use fathom_data::plaza::PlazaLog;
 use fathom_experiments::example_log::{ins_dvl_example, range_beacon_example};
-use fathom_experiments::plaza::Plaza;
+use fathom_experiments::plaza::{Plaza, find_data_dir};
 use fathom_replay::plaza::parse_settings;
 use fathom_sim::user_run::one_line;
 use fathom_sim::{Experiment, error_chain};
@@ -51,8 +51,10 @@ pub(crate) enum LogCmd {
 pub(crate) struct ExampleArgs {
     /// Which kind of log.
     pub(crate) kind: KindArg,
-    /// The new log folder (must not hold a log).
-    pub(crate) dir: PathBuf,
+    /// The new log folder, which must not hold a log (default `fathom-out/<kind>-log`,
+    /// the `[data] dir` of `scenarios/<kind>.toml`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
     /// Length of the log, s.
     #[arg(long, value_name = "S", default_value_t = 300.0)]
     pub(crate) duration: f64,
@@ -66,10 +68,18 @@ pub(crate) struct ExampleArgs {
 
 #[derive(Debug, Args)]
 pub(crate) struct FromPlazaArgs {
-    /// Folder holding the Plaza data set's files.
-    pub(crate) plaza_dir: PathBuf,
-    /// The new log folder.
-    pub(crate) dir: PathBuf,
+    /// Folder holding the Plaza data set's files (default: `data/plaza1`, looked up in
+    /// the current directory and beside each of its ancestors: the repository's copy).
+    pub(crate) plaza_dir: Option<PathBuf>,
+    /// The new log folder (default `fathom-out/plaza-log`, the `[data] dir` of
+    /// `scenarios/range-beacon-plaza.toml`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+}
+
+/// The default folder of a log: `fathom-out/<name>-log`.
+fn log_out(name: &str) -> PathBuf {
+    crate::default_out(&format!("{name}-log"))
 }
 
 #[derive(Debug, Args)]
@@ -78,34 +88,62 @@ pub(crate) struct LogCheckArgs {
     pub(crate) dir: PathBuf,
 }
 
+/// The `plaza` preset's data folder (`data/plaza1`) found from the current directory
+/// as `fathom run` finds it (inside it, then beside each of its ancestors).
+fn default_plaza_dir(data_dir: &str) -> Result<PathBuf, Failure> {
+    let cwd = std::env::current_dir()
+        .map_err(|e| Failure::Run(anyhow!("cannot read the current directory: {e}")))?;
+    find_data_dir(&cwd, data_dir).ok_or_else(|| {
+        Failure::Usage(anyhow!(
+            "no Plaza folder given and `{data_dir}` is not found in `{}` or beside any of its \
+             ancestors; give the folder holding `*_DR.txt`, `*_TD.txt` and `*_.mat`",
+            cwd.display()
+        ))
+    })
+}
+
 pub(crate) fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
     let usage =
         |e: &(dyn std::error::Error + 'static)| Failure::Usage(anyhow!(one_line(&error_chain(e))));
     match cmd {
         LogCmd::Example(a) => {
             let kind = a.kind.kind();
-            let files = match kind {
-                LogKind::RangeBeacon => range_beacon_example(a.duration, a.seed, !a.no_truth)
-                    .map_err(|e| usage(&e))?
-                    .to_files(),
-                LogKind::InsDvl => ins_dvl_example(a.duration, a.seed, !a.no_truth)
-                    .map_err(|e| usage(&e))?
-                    .to_files(),
+            let dir = a.out.clone().unwrap_or_else(|| log_out(kind.name()));
+            let (files, outliers) = match kind {
+                LogKind::RangeBeacon => {
+                    let ex = range_beacon_example(a.duration, a.seed, !a.no_truth)
+                        .map_err(|e| usage(&e))?;
+                    let note = format!(
+                        "; {} range outlier{} of +{} m injected",
+                        ex.outliers,
+                        if ex.outliers == 1 { "" } else { "s" },
+                        ex.outlier_m
+                    );
+                    (ex.log.to_files(), note)
+                }
+                LogKind::InsDvl => (
+                    ins_dvl_example(a.duration, a.seed, !a.no_truth)
+                        .map_err(|e| usage(&e))?
+                        .to_files(),
+                    String::new(),
+                ),
             };
             let about = format!(
-                "simulated example ({} s, seed {}{}) written by `fathom log example`",
+                "simulated example ({} s, seed {}{}{outliers}) written by `fathom log \
+                 example` with the noise of the built-in scenarios/{}.toml",
                 a.duration,
                 a.seed,
-                if a.no_truth { ", no truth" } else { "" }
+                if a.no_truth { ", no truth" } else { "" },
+                kind.name()
             );
-            write_log(&a.dir, &Manifest::new(kind, about), &files).map_err(|e| usage(&e))?;
+            write_log(&dir, &Manifest::new(kind, about), &files).map_err(|e| usage(&e))?;
             Ok(format!(
-                "wrote a {} log into {} ({}); replay it with `fathom replay {} {}`\n",
+                "wrote the {} log {} ({}{outliers}); replay it with `fathom replay {} {}`\n",
                 kind.name(),
-                a.dir.display(),
+                dir.display(),
                 files.iter().map(|f| f.0).collect::<Vec<_>>().join(", "),
                 kind.name(),
-                a.dir.display()
+                dir.display()
             ))
         }
         LogCmd::FromPlaza(a) => {
@@ -114,30 +152,36 @@ pub(crate) fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
                 "built-in scenarios/plaza.toml",
             )
             .map_err(|e| Failure::Run(anyhow!(e)))?;
-            if !a.plaza_dir.is_dir() {
-                return Err(Failure::Usage(anyhow!(
-                    "cannot read the Plaza data: `{}` is not a folder",
-                    a.plaza_dir.display()
-                )));
-            }
+            let plaza_dir = match &a.plaza_dir {
+                Some(d) if d.is_dir() => d.clone(),
+                Some(d) => {
+                    return Err(Failure::Usage(anyhow!(
+                        "cannot read the Plaza data: `{}` is not a folder",
+                        d.display()
+                    )));
+                }
+                None => default_plaza_dir(&settings.data_dir)?,
+            };
+            let dir = a.out.clone().unwrap_or_else(|| log_out("plaza"));
             let log =
-                PlazaLog::read_dir(&a.plaza_dir, settings.range_order).map_err(|e| usage(&e))?;
+                PlazaLog::read_dir(&plaza_dir, settings.range_order).map_err(|e| usage(&e))?;
             let rb = range_beacon_from_plaza(&log);
             let about = format!(
                 "CMU Plaza data converted from `{}` by `fathom log from-plaza`",
-                a.plaza_dir.display()
+                plaza_dir.display()
             );
             write_log(
-                &a.dir,
+                &dir,
                 &Manifest::new(LogKind::RangeBeacon, about),
                 &rb.to_files(),
             )
             .map_err(|e| usage(&e))?;
             Ok(format!(
-                "wrote a range-beacon log into {}; replay it with `fathom replay range-beacon {} \
-                 --config scenarios/range-beacon-plaza.toml`\n",
-                a.dir.display(),
-                a.dir.display()
+                "wrote the range-beacon log {} from {}; replay it with `fathom replay \
+                 range-beacon {} --config scenarios/range-beacon-plaza.toml`\n",
+                dir.display(),
+                plaza_dir.display(),
+                dir.display()
             ))
         }
         LogCmd::Check(a) => {

@@ -10,7 +10,7 @@ use clap::{Args, Subcommand};
 use fathom_pils::report::SimReport;
 use fathom_pils::scenario::Method;
 use fathom_pils::session::Session;
-use fathom_pils::settings::{PilsFile, Settings};
+use fathom_pils::settings::{Pacing, PilsFile, Settings};
 
 use crate::Failure;
 use crate::pils_session::{both, claim, commit, prepare, run_err, write_files};
@@ -24,7 +24,7 @@ pub struct PilsArgs {
     /// Settings file (`experiment = "pils"`): both processes on loopback.
     scenario: Option<PathBuf>,
     /// Output folder.
-    #[arg(long, value_name = "DIR", default_value = "target/pils")]
+    #[arg(long, value_name = "DIR", default_value = "fathom-out/pils")]
     out: PathBuf,
     /// The navigation method (overrides the file's).
     #[arg(long, value_name = "NAME")]
@@ -48,7 +48,7 @@ enum PilsSide {
         #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:0")]
         bind: SocketAddr,
         /// Output folder.
-        #[arg(long, value_name = "DIR", default_value = "target/pils/sim")]
+        #[arg(long, value_name = "DIR", default_value = "fathom-out/pils-sim")]
         out: PathBuf,
         /// Write into `--out` even if it holds files fathom did not write.
         #[arg(long)]
@@ -68,7 +68,7 @@ enum PilsSide {
         #[arg(long, value_name = "NAME")]
         method: Option<String>,
         /// Output folder.
-        #[arg(long, value_name = "DIR", default_value = "target/pils/nav")]
+        #[arg(long, value_name = "DIR", default_value = "fathom-out/pils-nav")]
         out: PathBuf,
         /// Write into `--out` even if it holds files fathom did not write.
         #[arg(long)]
@@ -84,8 +84,8 @@ enum PilsSide {
         /// The method (overrides the file's).
         #[arg(long, value_name = "NAME")]
         method: Option<String>,
-        /// Output CSV.
-        #[arg(long, value_name = "FILE")]
+        /// Output folder: the solutions go into its `solutions.csv`.
+        #[arg(long, value_name = "DIR", default_value = "fathom-out/pils-offline")]
         out: PathBuf,
     },
     /// Realtime vs lockstep over `--runs` runs: both processes per session, each run
@@ -101,7 +101,7 @@ enum PilsSide {
         #[arg(long, value_name = "NAME")]
         method: Option<String>,
         /// Output folder.
-        #[arg(long, value_name = "DIR", default_value = "target/pils-compare")]
+        #[arg(long, value_name = "DIR", default_value = "fathom-out/pils-compare")]
         out: PathBuf,
         /// Write into `--out` even if it holds files fathom did not write.
         #[arg(long)]
@@ -126,6 +126,33 @@ fn load(path: &Path, method: Option<&str>) -> Result<Settings, Failure> {
     Ok(s)
 }
 
+/// The `experiment` key of PILS settings.
+pub(crate) const EXPERIMENT: &str = "pils";
+
+/// `fathom check` of PILS settings: parsed, checked, the world built and the run
+/// flown, as `fathom pils` does before touching a socket (exit 2 on any error).
+pub(crate) fn check(path: &Path, quiet: bool) -> Result<String, Failure> {
+    let s = load(path, None)?;
+    prepare(&s, path)?;
+    let line = format!(
+        "OK {}: PILS settings, method {}, {} pacing; the world built and the run flown",
+        path.display(),
+        s.method.name(),
+        match s.file.link.pacing {
+            Pacing::Lockstep => "lockstep",
+            Pacing::Realtime => "realtime",
+        }
+    );
+    if quiet {
+        return Ok(format!("{line}\n"));
+    }
+    let resolved = toml::to_string(&s.file)
+        .map_err(|e| Failure::Run(anyhow!("printing the settings: {e}")))?;
+    Ok(format!(
+        "# {line}\n# resolved settings (defaults filled in):\n{resolved}"
+    ))
+}
+
 /// The session's error, naming where its record is.
 fn session_result<R>(s: Session<R>, out: &Path) -> Result<R, Failure> {
     match s.error {
@@ -136,6 +163,9 @@ fn session_result<R>(s: Session<R>, out: &Path) -> Result<R, Failure> {
         None => Ok(s.report),
     }
 }
+
+/// The file of `fathom pils offline` in its `--out` folder.
+const OFFLINE_CSV: &str = "solutions.csv";
 
 /// Runs a `fathom pils` command.
 pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
@@ -198,10 +228,14 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
             let s = load(scenario, method.as_deref())?;
             let csv =
                 fathom_pils::session::offline_csv(&s, s.method, *quantized).map_err(run_err)?;
-            std::fs::write(out, csv)
-                .with_context(|| format!("writing {}", out.display()))
+            std::fs::create_dir_all(out)
+                .with_context(|| format!("cannot create `{}` (--out)", out.display()))
+                .map_err(Failure::Usage)?;
+            let file = out.join(OFFLINE_CSV);
+            std::fs::write(&file, csv)
+                .with_context(|| format!("writing {}", file.display()))
                 .map_err(Failure::Run)?;
-            Ok(format!("offline solutions in {}\n", out.display()))
+            Ok(format!("offline solutions in {}\n", file.display()))
         }
         Some(PilsSide::Compare {
             scenario,

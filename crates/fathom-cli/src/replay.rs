@@ -1,6 +1,6 @@
-//! `fathom replay plaza|range-beacon|ins-dvl DIR`: a replay on recorded data, run as
+//! `fathom replay plaza|range-beacon|ins-dvl [DIR]`: a replay on recorded data, run as
 //! a job of the driver like `fathom run` (the settings checked first, their `[data]
-//! dir` replaced by `DIR`, then `fathom_sim::driver::execute_to` with command
+//! dir` replaced by `DIR` if given, then `fathom_sim::driver::execute_to` with command
 //! `replay`), printed as `fathom run` prints: every row with its unit, then the checks
 //! or claims.
 
@@ -28,14 +28,16 @@ pub(crate) enum ReplayData {
 
 #[derive(Debug, Args)]
 pub(crate) struct PlazaArgs {
-    /// Folder holding the data set's `*_DR.txt`, `*_TD.txt` and `*_.mat` files.
-    pub(crate) dir: PathBuf,
+    /// Folder holding the data set's `*_DR.txt`, `*_TD.txt` and `*_.mat` files
+    /// (default: the settings' `[data] dir`, `data/plaza1`, looked up in the current
+    /// directory and beside each of its ancestors: the repository's copy).
+    pub(crate) dir: Option<PathBuf>,
     /// Settings file (TOML, the schema of `scenarios/plaza.toml`); default: built in.
     #[arg(long, value_name = "FILE")]
     pub(crate) config: Option<PathBuf>,
-    /// Output folder (created if needed).
-    #[arg(long, value_name = "DIR", default_value = "plaza-replay")]
-    pub(crate) out: PathBuf,
+    /// Output folder (default `fathom-out/plaza-replay`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
     /// Write into a folder holding files fathom did not write (they are kept; only
     /// fathom's own files are replaced).
     #[arg(long)]
@@ -47,13 +49,15 @@ pub(crate) struct PlazaArgs {
 
 #[derive(Debug, Args)]
 pub(crate) struct OwnArgs {
-    /// The log folder (`log.toml` and the CSV files).
-    pub(crate) dir: PathBuf,
+    /// The log folder (`log.toml` and the CSV files); default: the settings' `[data]
+    /// dir` (`fathom-out/<kind>-log`, where `fathom log example <kind>` writes).
+    pub(crate) dir: Option<PathBuf>,
     /// Settings and methods (TOML, the schema of `scenarios/range-beacon.toml` or
     /// `scenarios/ins-dvl.toml`); default: built in.
     #[arg(long, value_name = "FILE")]
     pub(crate) config: Option<PathBuf>,
-    /// Output folder (default `range-beacon-replay` / `ins-dvl-replay`).
+    /// Output folder (default `fathom-out/range-beacon-replay` /
+    /// `fathom-out/ins-dvl-replay`).
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
     /// Write into a folder holding files fathom did not write (they are kept; only
@@ -65,7 +69,8 @@ pub(crate) struct OwnArgs {
 /// What one replay command asks for.
 struct Request<'a> {
     exp: &'static dyn DynExperiment,
-    dir: &'a Path,
+    /// The data folder; `None`: the settings' `[data] dir`.
+    dir: Option<&'a Path>,
     config: Option<&'a Path>,
     out: PathBuf,
     force: bool,
@@ -81,17 +86,17 @@ pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
                      deterministic (no random draws, no base seed)"
                 )));
             }
-            if !a.dir.is_dir() {
+            if let Some(dir) = a.dir.as_deref().filter(|d| !d.is_dir()) {
                 return Err(Failure::Usage(anyhow!(
                     "cannot read the Plaza data: `{}` is not a folder",
-                    a.dir.display()
+                    dir.display()
                 )));
             }
             Request {
                 exp: &Plaza,
-                dir: &a.dir,
+                dir: a.dir.as_deref(),
                 config: a.config.as_deref(),
-                out: a.out.clone(),
+                out: a.out.clone().unwrap_or_else(|| replay_out(&Plaza)),
                 force: a.force,
             }
         }
@@ -104,14 +109,16 @@ pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
 fn own<'a>(exp: &'static dyn DynExperiment, a: &'a OwnArgs) -> Request<'a> {
     Request {
         exp,
-        dir: &a.dir,
+        dir: a.dir.as_deref(),
         config: a.config.as_deref(),
-        out: a
-            .out
-            .clone()
-            .unwrap_or_else(|| PathBuf::from(format!("{}-replay", exp.name()))),
+        out: a.out.clone().unwrap_or_else(|| replay_out(exp)),
         force: a.force,
     }
+}
+
+/// The default output folder of `fathom replay <kind>`: `fathom-out/<kind>-replay`.
+fn replay_out(exp: &dyn DynExperiment) -> PathBuf {
+    crate::default_out(&format!("{}-replay", exp.name()))
 }
 
 /// The text and label of a settings file: `config` if given (unreadable: a usage
@@ -149,6 +156,13 @@ fn load_settings(
     Ok((text, label))
 }
 
+/// The settings' `[data] dir`, as written.
+fn data_dir_of(text: &str) -> Option<String> {
+    let table: toml::Table = toml::from_str(text).ok()?;
+    let dir = table.get("data")?.get("dir")?.as_str()?;
+    Some(dir.to_string())
+}
+
 /// `text` with its `[data] dir` replaced by `dir` (made absolute).
 fn with_data_dir(text: &str, dir: &Path) -> Result<String, Failure> {
     let mut table: toml::Table = toml::from_str(text)
@@ -169,7 +183,13 @@ fn with_data_dir(text: &str, dir: &Path) -> Result<String, Failure> {
 
 fn replay(r: &Request<'_>) -> Result<String, Failure> {
     let (text, label) = load_settings(r.exp, r.config)?;
-    let text = with_data_dir(&text, r.dir)?;
+    let (text, data) = match r.dir {
+        Some(dir) => (with_data_dir(&text, dir)?, dir.display().to_string()),
+        None => {
+            let data = data_dir_of(&text).unwrap_or_default();
+            (text, format!("`{data}` (the settings' data.dir)"))
+        }
+    };
     let job = Job {
         text: &text,
         file: &label,
@@ -194,9 +214,8 @@ fn replay(r: &Request<'_>) -> Result<String, Failure> {
             Failure::Run(e) => Failure::Run(e.context("replay failed")),
         })?;
     let mut out = format!(
-        "{} replay of {} with {label}: done in {:.1} s (fathom {})\n",
+        "{} replay of {data} with {label}: done in {:.1} s (fathom {})\n",
         r.exp.name(),
-        r.dir.display(),
         result.elapsed.as_secs_f64(),
         info.fathom_version
     );
@@ -244,9 +263,9 @@ mod tests {
             Err(Failure::Usage(_))
         ));
         let args = PlazaArgs {
-            dir: dir.join("no-such-folder"),
+            dir: Some(dir.join("no-such-folder")),
             config: None,
-            out: dir.join("out"),
+            out: Some(dir.join("out")),
             seed: None,
             force: false,
         };
@@ -254,9 +273,9 @@ mod tests {
         assert!(matches!(plaza(args), Err(Failure::Usage(_))));
         std::fs::create_dir_all(dir.join("empty")).unwrap();
         let args = PlazaArgs {
-            dir: dir.join("empty"),
+            dir: Some(dir.join("empty")),
             config: None,
-            out: dir.join("out"),
+            out: Some(dir.join("out")),
             seed: None,
             force: false,
         };
@@ -267,9 +286,9 @@ mod tests {
         }
         // A seed does not apply to a deterministic replay: a usage error, not ignored.
         let args = PlazaArgs {
-            dir: dir.join("empty"),
+            dir: Some(dir.join("empty")),
             config: None,
-            out: dir.join("out"),
+            out: Some(dir.join("out")),
             seed: Some("3".into()),
             force: false,
         };

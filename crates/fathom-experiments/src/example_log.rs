@@ -1,15 +1,23 @@
 //! Simulated logs in fathom's CSV layout, for trying `fathom replay` without data of
-//! one's own (`fathom log example <kind> <dir>`) and for the tests.
+//! one's own (`fathom log example <kind>`) and for the tests. Each is simulated with
+//! the noise the built-in settings of its replay assume (`scenarios/<kind>.toml`), so
+//! that `fathom replay <kind>` with them finds consistent filters:
 //!
 //! - [`ins_dvl_example`]: the `vkf` experiment's mission (the preset's route, seabed,
-//!   IMU, DVL, echo sounder, RPM and depth gauge) cut to `duration` seconds, one
-//!   noise draw: the IMU increments at 100 Hz, the DVL velocity rotated into the body
-//!   frame with the true attitude (unflagged garbage beyond its range, as in the
-//!   experiment), altitude, RPM and depth at 5 Hz, truth at 1 Hz;
-//! - [`range_beacon_example`]: a vehicle at 1 m/s on a 20 m circle at 10 m depth, DVL
-//!   with a 1 % scale error at 5 Hz, heading at 10 Hz, four beacons ranged in turn
-//!   every 0.3 s with 0.3 m noise and 2 % outliers of +5 m, depth at 5 Hz, truth at
-//!   1 Hz.
+//!   IMU, echo sounder and RPM) cut to `duration` seconds, one noise draw: the IMU
+//!   increments at 100 Hz, the DVL velocity (white noise of the settings'
+//!   `dvl.sigma_mps`, no scale factor or bias) rotated into the body frame with the
+//!   true attitude (unflagged garbage beyond its range, as in the experiment: the
+//!   first ~300 s stay in range), altitude, RPM and depth (the settings'
+//!   `depth.sigma_m`) at 5 Hz, truth at 1 Hz;
+//! - [`range_beacon_example`]: a vehicle at 1 m/s on a 20 m circle at 10 m depth; a
+//!   DVL at 5 Hz with white noise of the settings' `dvl.velocity_sigma_mps`, a DVL row
+//!   at the start (a replay holds each DVL row until the next, and a velocity of zero
+//!   before the first); headings at 10 Hz whose differences carry the settings'
+//!   `dvl.yaw_rate_sigma_rad_per_s` (the replay uses heading only as the yaw rate of
+//!   consecutive rows); four beacons ranged in turn every 0.3 s with the settings'
+//!   `ranges.sigma_m`, 2 % of them outliers of `2 robust.reject_sigma` range σ that
+//!   the robust filters reject; depth (`depth.sigma_m`) at 5 Hz; truth at 1 Hz.
 //!
 //! Both are deterministic for a seed (run stream 0 of it).
 
@@ -25,6 +33,7 @@ use fathom_data::layout::ins_dvl::{DvlRow, ImuForm, InsDvlLog, InsStart, InsTrut
 use fathom_data::layout::range_beacon::{
     Beacon, Motion, RangeBeaconLog, RangeRow, Start, TruthRow,
 };
+use fathom_replay::own_log::{INS_DVL_PRESET, RANGE_BEACON_PRESET};
 use fathom_sim::SimError;
 use fathom_sim::experiment::Experiment;
 use fathom_sim::montecarlo::run_rng;
@@ -54,6 +63,13 @@ pub fn ins_dvl_example(
         ));
     }
     sc.route.duration_s = duration_s;
+    // The sensors as the replay's built-in settings model them.
+    let settings =
+        fathom_replay::ins_dvl::parse_settings(INS_DVL_PRESET, "built-in scenarios/ins-dvl.toml")?;
+    sc.dvl.sigma_mps = settings.dvl_sigma;
+    sc.dvl.scale_factor_half_width = 0.0;
+    sc.dvl.bias_half_width_mps = 0.0;
+    sc.depth_gauge.sigma_m = settings.depth_sigma;
     let c = sc
         .check(label)
         .map_err(|e| SimError::invalid(label, "--duration", e.to_string()))?;
@@ -130,6 +146,17 @@ pub fn ins_dvl_example(
     Ok(log)
 }
 
+/// The `range-beacon` example and how many outliers it holds.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RangeBeaconExample {
+    /// The log.
+    pub log: RangeBeaconLog,
+    /// Ranges with an outlier added (the robust filters reject them).
+    pub outliers: usize,
+    /// The outliers' size, m.
+    pub outlier_m: f64,
+}
+
 /// The `range-beacon` example (module docs): `duration_s` seconds (10 to 36,000),
 /// with or without `truth.csv`.
 ///
@@ -139,7 +166,7 @@ pub fn range_beacon_example(
     duration_s: f64,
     seed: u64,
     with_truth: bool,
-) -> Result<RangeBeaconLog, SimError> {
+) -> Result<RangeBeaconExample, SimError> {
     if !(duration_s.is_finite() && (10.0..=36_000.0).contains(&duration_s)) {
         return Err(SimError::invalid(
             "fathom log example range-beacon",
@@ -147,6 +174,12 @@ pub fn range_beacon_example(
             format!("must be between 10 and 36000 s, got {duration_s}"),
         ));
     }
+    let settings = fathom_replay::range_beacon::parse_settings(
+        RANGE_BEACON_PRESET,
+        "built-in scenarios/range-beacon.toml",
+    )?;
+    let range_sigma = settings.engine.range_sigma;
+    let outlier_m = 2.0 * settings.engine.reject_sigma * range_sigma;
     let mut rng = run_rng(seed, 0);
     let (radius, rate) = (20.0f64, 0.05f64);
     let pos = |t: f64| [radius * (rate * t).cos(), radius * (rate * t).sin(), 10.0];
@@ -158,27 +191,32 @@ pub fn range_beacon_example(
         [30.0, -30.0, 40.0],
     ];
     let steps = (duration_s * 10.0).round() as usize;
-    let mut dvl = Vec::new();
+    let dt = 0.1;
+    let speed = radius * rate;
+    let dvl_row = |rng: &mut rand_chacha::ChaCha8Rng, t: f64| {
+        let s = settings.dvl_velocity_sigma;
+        (
+            t,
+            [speed + gauss(rng, s[0]), gauss(rng, s[1]), gauss(rng, s[2])],
+        )
+    };
+    let mut dvl = vec![dvl_row(&mut rng, 0.0)];
     let mut head = Vec::new();
     let mut ranges = Vec::new();
     let mut depth = Vec::new();
     let mut truth = Vec::new();
-    let heading_sigma = 0.5f64.to_radians();
+    // The heading error is a random walk whose steps are the yaw-rate error times the
+    // interval: the rate of consecutive headings then has the settings' σ.
+    let mut heading_error = 0.0;
+    let mut outliers = 0;
     for k in 1..=steps {
-        let t = k as f64 / 10.0;
+        let t = k as f64 * dt;
         let p = pos(t);
-        head.push((t, wrap_pi(heading(t) + gauss(&mut rng, heading_sigma))));
+        heading_error += gauss(&mut rng, settings.yaw_rate_sigma * dt);
+        head.push((t, wrap_pi(heading(t) + heading_error)));
         if k % 2 == 0 {
-            let speed = radius * rate;
-            dvl.push((
-                t,
-                [
-                    1.01 * speed + gauss(&mut rng, 0.02),
-                    gauss(&mut rng, 0.02),
-                    gauss(&mut rng, 0.02),
-                ],
-            ));
-            depth.push((t, p[2] + gauss(&mut rng, 0.05)));
+            dvl.push(dvl_row(&mut rng, t));
+            depth.push((t, p[2] + gauss(&mut rng, settings.depth_sigma)));
         }
         if k % 3 == 0 {
             let b = (k / 3) % beacons.len();
@@ -186,11 +224,16 @@ pub fn range_beacon_example(
                 .map(|i| (p[i] - beacons[b][i]).powi(2))
                 .sum::<f64>()
                 .sqrt();
-            let outlier = if rng.random::<f64>() < 0.02 { 5.0 } else { 0.0 };
+            let outlier = if rng.random::<f64>() < 0.02 {
+                outliers += 1;
+                outlier_m
+            } else {
+                0.0
+            };
             ranges.push(RangeRow {
                 time: t,
                 beacon: b,
-                range: (d + gauss(&mut rng, 0.3) + outlier).max(0.0),
+                range: (d + gauss(&mut rng, range_sigma) + outlier).max(0.0),
             });
         }
         if k % 10 == 0 && with_truth {
@@ -203,7 +246,7 @@ pub fn range_beacon_example(
         }
     }
     let p0 = pos(0.0);
-    Ok(RangeBeaconLog {
+    let log = RangeBeaconLog {
         beacons: beacons
             .iter()
             .enumerate()
@@ -223,5 +266,10 @@ pub fn range_beacon_example(
         ranges,
         depth: Some(depth),
         truth: with_truth.then_some(truth),
+    };
+    Ok(RangeBeaconExample {
+        log,
+        outliers,
+        outlier_m,
     })
 }

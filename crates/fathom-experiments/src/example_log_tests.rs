@@ -35,10 +35,11 @@ fn replay_job(
     dir: &Path,
     out: &Path,
 ) -> Result<ExperimentResult, SimError> {
-    let text = exp.preset().replace(
-        "dir = \"my-log\"",
-        &format!("dir = {:?}", dir.to_str().unwrap()),
-    );
+    let preset_dir = format!("dir = \"fathom-out/{}-log\"", exp.name());
+    assert!(exp.preset().contains(&preset_dir), "{}", exp.name());
+    let text = exp
+        .preset()
+        .replace(&preset_dir, &format!("dir = {:?}", dir.to_str().unwrap()));
     let job = Job {
         text: &text,
         file: "preset",
@@ -64,7 +65,7 @@ fn read(dir: &Path, file: &str) -> String {
 fn example_logs_replay_with_and_without_truth() {
     for truth in [true, false] {
         let dir = scratch(&format!("rb-{truth}"));
-        let log = range_beacon_example(120.0, 3, truth).unwrap();
+        let log = range_beacon_example(120.0, 3, truth).unwrap().log;
         write_log(
             &dir,
             &Manifest::new(LogKind::RangeBeacon, "example"),
@@ -185,4 +186,44 @@ fn without_truth_the_nis_tells_the_naive_filter_from_the_switching_one() {
     assert!(vkf.mean < 6.0, "{vkf:?}");
     assert_eq!(vkf.dof, 3);
     assert!(r.method("ESKF").unwrap().depth_nis.unwrap().count > 2000);
+}
+
+/// What `fathom log example <kind>` writes by default (300 s, seed 1) replayed with the
+/// built-in settings: every filter is consistent (every check holds), and the robust
+/// filters reject exactly the injected range outliers.
+#[test]
+fn default_examples_are_consistent_with_the_built_in_settings() {
+    let ex = range_beacon_example(300.0, 1, true).unwrap();
+    assert!(ex.outliers > 5, "{}", ex.outliers);
+    let dir = scratch("rb-default");
+    write_log(
+        &dir,
+        &Manifest::new(LogKind::RangeBeacon, "example"),
+        &ex.log.to_files(),
+    )
+    .unwrap();
+    let r = replay_job(&RangeBeacon, &dir, &dir.with_extension("out")).unwrap();
+    for m in ["AS", "SC", "SI"] {
+        let rejected = r.summary.row(m, "rejected").unwrap().value;
+        assert_eq!(rejected, ex.outliers as f64, "{m}");
+    }
+    let dir = scratch("ins-default");
+    let log = ins_dvl_example(300.0, 1, true).unwrap();
+    write_log(
+        &dir,
+        &Manifest::new(LogKind::InsDvl, "example"),
+        &log.to_files(),
+    )
+    .unwrap();
+    let ri = replay_job(&InsDvl, &dir, &dir.with_extension("out")).unwrap();
+    for result in [&r, &ri] {
+        assert!(
+            result.summary.claims.len() >= 6,
+            "{:?}",
+            result.summary.claims
+        );
+        for c in &result.summary.claims {
+            assert!(c.holds, "{}: {} ({})", result.name, c.id, c.detail);
+        }
+    }
 }

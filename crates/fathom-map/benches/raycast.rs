@@ -1,6 +1,6 @@
 //! Closest-hit ray casting, single thread, ns per ray: the `buildings` preset and,
-//! when `FATHOM_RAYCAST_MESH` names an OBJ file (in NED metres, as
-//! `shared/bench/raycast_ref.py` writes it; `cargo xtask bench raycast --mesh FILE`
+//! when `FATHOM_RAYCAST_MESH` names an OBJ file (in NED metres, as the Embree
+//! reference script of docs/performance.md writes it; `cargo xtask bench raycast --mesh FILE`
 //! sets it), that mesh. Rays: origins uniform in the mesh's bounding box, directions
 //! uniform on the sphere, no range limit, seeded (the reference script's
 //! distribution). One iteration is one ray (cycling through 2^16 pre-drawn rays);

@@ -16,7 +16,8 @@
 //!   the rows and checks, the report's notes;
 //! - [`figures`]: the figures every replay draws (estimate vs truth, error with 3σ,
 //!   innovations with ±3√S, NIS against a consistent filter's interval);
-//! - [`data_dir`]: where a replay's data folder is.
+//! - [`data_dir`]: where a replay's data folder is;
+//! - [`method_keys`]: the values each `[[methods]]` key of a replay accepts.
 //!
 //! [`own_log_replays`] lists the own-log replays as jobs ([`range_beacon::RangeBeacon`],
 //! [`ins_dvl::InsDvl`]) for the front ends, beside the paper experiments' registry.
@@ -25,6 +26,7 @@ pub mod consistency;
 pub mod data_dir;
 pub mod figures;
 pub mod ins_dvl;
+pub mod method_keys;
 pub mod own_log;
 pub mod plaza;
 pub mod range_beacon;

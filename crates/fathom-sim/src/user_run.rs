@@ -108,12 +108,15 @@ pub struct CheckedScenario {
 }
 
 /// Parse and validate a scenario text without running it (`fathom check`), with the
-/// default [`Limits`].
+/// default [`Limits`], then, for an experiment whose preparation reads the user's files
+/// ([`crate::Experiment::CHECK_PREPARES`]), prepare it as a run would (load its world,
+/// data folder or log, relative to the current directory), without running.
 ///
 /// # Errors
 /// As [`peek_experiment`], then the experiment's own parse and check errors
 /// ([`SimError::Toml`] with key path and line, [`SimError::Invalid`] with key path),
-/// then a cost beyond the limits ([`SimError::Invalid`] naming the key).
+/// then a cost beyond the limits ([`SimError::Invalid`] naming the key), then the
+/// preparation's errors (the same as `fathom run`'s).
 pub fn check_scenario_text(
     text: &str,
     file: &str,
@@ -141,18 +144,25 @@ pub fn check_scenario_text_with(
         progress: None,
         env: Environment {
             limits: *limits,
-            ..Environment::new(".")
+            // Data looked up as `fathom run` looks it up: from the current directory.
+            ..Environment::new(std::env::current_dir().unwrap_or_else(|_| ".".into()))
         },
     };
     let (exp, assessed) = assess_scenario(&job, registry)?;
-    let (keys, tables) = count_keys(&toml::Value::Table(assessed.table));
-    Ok(CheckedScenario {
+    let (keys, tables) = count_keys(&toml::Value::Table(assessed.table.clone()));
+    let checked = CheckedScenario {
         experiment: exp.name().to_string(),
-        resolved_toml: assessed.resolved.toml,
+        resolved_toml: assessed.resolved.toml.clone(),
         keys,
         tables,
-        cost: assessed.cost,
-    })
+        cost: assessed.cost.clone(),
+    };
+    // What a run loads before its first run (worlds, data folders, logs), so that a
+    // scenario `check` accepts is one `run` starts.
+    if exp.check_prepares() {
+        assessed.plan()?;
+    }
+    Ok(checked)
 }
 
 /// Assesses a user's scenario once: the text of `job` parsed, its experiment picked

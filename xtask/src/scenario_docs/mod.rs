@@ -97,9 +97,19 @@ fn array_of_tables<'a>(defs: &'a Map<String, Value>, v: &'a Value) -> Option<&'a
     is_table(defs, items).then(|| resolve(defs, items))
 }
 
+/// The schema of an optional value (`anyOf: [T, null]`) without its `null`.
+fn non_null<'a>(defs: &'a Map<String, Value>, v: &'a Value) -> &'a Value {
+    let v = resolve(defs, v);
+    match v.get("anyOf").and_then(Value::as_array).map(Vec::as_slice) {
+        Some([a, b]) if b.get("type").and_then(Value::as_str) == Some("null") => resolve(defs, a),
+        Some([a, b]) if a.get("type").and_then(Value::as_str) == Some("null") => resolve(defs, b),
+        _ => v,
+    }
+}
+
 /// The TOML type of a leaf.
 fn type_name(defs: &Map<String, Value>, v: &Value) -> String {
-    let v = resolve(defs, v);
+    let v = non_null(defs, v);
     if let Some(options) = v.get("oneOf").or_else(|| v.get("enum")) {
         let values: Vec<String> = options
             .as_array()
@@ -301,6 +311,23 @@ mod tests {
             committed == render(&registry()),
             "docs/scenarios.md is out of date: run `cargo xtask codegen` and commit it"
         );
+    }
+
+    /// An optional enum (`Option<AxesToml>`) lists its values instead of "value".
+    #[test]
+    fn optional_enums_list_their_values() {
+        let urban = registry()
+            .into_iter()
+            .find(|e| e.name() == "urban")
+            .unwrap();
+        let md = experiment_section("urban", &serde_json::to_value(urban.schema()).unwrap());
+        let axes = md
+            .lines()
+            .find(|l| l.starts_with("| `scenarios[].world.axes` |"))
+            .expect("the axes row");
+        for v in ["ned", "enu_z_up", "y_up_right_handed", "y_up_left_handed"] {
+            assert!(axes.contains(&format!("`\"{v}\"`")), "{axes}");
+        }
     }
 
     #[test]

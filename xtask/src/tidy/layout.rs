@@ -34,7 +34,8 @@ const SIBLING_FOLDER: &str = "shared";
 fn sibling_needles() -> [String; 2] {
     [
         format!("../{SIBLING_FOLDER}"),
-        format!("{SIBLING_FOLDER}/data"),
+        // Any path inside it (data, specs, the benchmark scripts).
+        format!("{SIBLING_FOLDER}/"),
     ]
 }
 
@@ -605,4 +606,7 @@ fn no_test_gives_up_quietly_and_nothing_reads_the_sibling_folder() {
     let outside = format!("let d = Path::new(\"../{SIBLING_FOLDER}/plaza1\");");
     assert!(names_sibling(&outside));
     assert!(!names_sibling("let d = repo_root().join(\"data/plaza1\");"));
+    assert!(names_sibling(&format!(
+        "//! see `{SIBLING_FOLDER}/bench/x.py`"
+    )));
 }

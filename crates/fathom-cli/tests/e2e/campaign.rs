@@ -1,5 +1,5 @@
 //! Sharded campaigns through the real binary: `fathom run --shard K/M` and `fathom
-//! merge` give byte-identical outputs to one process (4 even shards, 3 uneven ones,
+//! merge` give the same set of files as one process, byte-identical (4 even shards, 3 uneven ones,
 //! shards given in any order), and every broken merge (a missing or duplicated shard,
 //! shards of different scenarios or versions, a corrupted record file) is refused with
 //! exit code 2 and one line, leaving nothing in the output folder.
@@ -37,9 +37,24 @@ fn shards(dir: &Path, file: &str, runs: &str, count: usize, prefix: &str) -> Vec
         .collect()
 }
 
-/// Every file the single-process run and the merge both write is byte-identical
-/// (except `run_info.json`).
+/// The names of the files in `dir`, sorted.
+fn file_set(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// The merge writes exactly the single run's set of files (the scenario as given and
+/// resolved included), and every file but `run_info.json` is byte-identical.
 fn same_outputs(dir: &Path, single: &str, merged: &str) {
+    let files = file_set(&dir.join(merged));
+    assert_eq!(files, file_set(&dir.join(single)), "{merged} vs {single}");
+    for f in ["scenario.toml", "scenario.resolved.toml", "run_info.json"] {
+        assert!(files.iter().any(|x| x == f), "{f} not in {files:?}");
+    }
     let mut compared = 0;
     for entry in std::fs::read_dir(dir.join(merged)).unwrap() {
         let name = entry.unwrap().file_name();

@@ -1,13 +1,16 @@
 //! `fathom check` on a corpus of broken scenario files: every file in
 //! `tests/cli_corpus/*.toml` gives exit code 2 and exactly the one-line error stored
-//! in its `.expected` snapshot; every preset in `scenarios/` checks OK.
+//! in its `.expected` snapshot; every settings file in `scenarios/` (scenarios,
+//! replay settings, PILS settings) checks OK through the binary once the logs the
+//! replay settings name exist, and a replay whose log is missing fails `check` as it
+//! fails `run`.
 
 use std::path::{Path, PathBuf};
 
 use fathom_experiments::registry;
 use fathom_sim::user_run::{EXIT_USAGE, check_command};
 
-use crate::support::{compare_snapshot, repo_root};
+use crate::support::{compare_snapshot, fathom, repo_root, scratch};
 
 fn corpus() -> Vec<PathBuf> {
     let dir = Path::new("tests/cli_corpus");
@@ -66,4 +69,58 @@ fn presets_check_ok() {
     // Negative control: a missing file is an error too.
     let (code, _) = check_command(Path::new("tests/cli_corpus/no-such-file.toml"), &reg);
     assert_eq!(code, EXIT_USAGE);
+}
+
+/// Every file under `scenarios/` is a settings file `fathom check` accepts (exit 0,
+/// kind detected from its `experiment` key), in a working directory holding what they
+/// read: the Plaza data (`data/plaza1`) and the logs the replay settings name
+/// (`fathom log example <kind>`, `fathom log from-plaza`: the README's walkthrough).
+#[test]
+fn every_settings_file_under_scenarios_checks_ok() {
+    let root = scratch("check-every-scenario");
+    // Before the logs exist, a replay's settings fail `check` exactly as `run` fails.
+    let rb = repo_root().join("scenarios/range-beacon.toml");
+    let rb = rb.to_str().unwrap();
+    let check = fathom(&root, &["check", rb]);
+    let run = fathom(&root, &["run", rb]);
+    assert_eq!(check.code, 2, "{check:?}");
+    assert_eq!(check.stderr, run.stderr);
+    assert!(check.stderr.contains("range-beacon-log"), "{check:?}");
+
+    let data = root.join("data/plaza1");
+    std::fs::create_dir_all(&data).unwrap();
+    for f in ["Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat"] {
+        std::fs::copy(repo_root().join("data/plaza1").join(f), data.join(f)).unwrap();
+    }
+    for args in [
+        &["log", "example", "range-beacon"][..],
+        &["log", "example", "ins-dvl"],
+        &["log", "from-plaza"],
+    ] {
+        let r = fathom(&root, args);
+        assert_eq!(r.code, 0, "{args:?}: {r:?}");
+    }
+    let mut checked = Vec::new();
+    let mut stack = vec![repo_root().join("scenarios")];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if path.extension().and_then(|x| x.to_str()) == Some("toml") {
+                let r = fathom(&root, &["check", "--quiet", path.to_str().unwrap()]);
+                assert_eq!(r.code, 0, "{}: {}", path.display(), r.stderr);
+                assert!(r.stdout.starts_with("OK "), "{}", r.stdout);
+                checked.push(path.file_name().unwrap().to_string_lossy().into_owned());
+            } else {
+                // Anything else under scenarios/ is a world a scenario reads.
+                assert!(dir.ends_with("worlds"), "{}", path.display());
+            }
+        }
+    }
+    checked.sort();
+    for kind in ["ins-dvl.toml", "pils.toml", "plaza.toml", "urban.toml"] {
+        assert!(checked.iter().any(|c| c == kind), "{checked:?}");
+    }
+    assert!(checked.len() >= 11, "{checked:?}");
 }

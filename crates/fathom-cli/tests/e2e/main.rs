@@ -9,6 +9,7 @@ mod support;
 mod beacons;
 mod campaign;
 mod cli;
+mod default_outputs;
 mod determinism;
 mod fusion;
 mod fuzz_corpus;

@@ -51,16 +51,22 @@ fn usage_error(dir: &Path, args: &[&str], want: &[&str]) {
 #[test]
 fn example_logs_replay_with_and_without_truth() {
     let root = scratch("own-logs-replay");
-    ok(
-        &root,
-        &["log", "example", "range-beacon", "rb", "--duration", "120"],
-    );
+    // The default example (300 s): it says how many range outliers it injected.
+    let wrote = ok(&root, &["log", "example", "range-beacon", "--out", "rb"]);
+    let injected: f64 = wrote
+        .split(" range outliers of +")
+        .next()
+        .and_then(|head| head.rsplit(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no outlier count in: {wrote}"));
+    assert!(injected > 0.0, "{wrote}");
     ok(
         &root,
         &[
             "log",
             "example",
             "range-beacon",
+            "--out",
             "rb-nt",
             "--duration",
             "120",
@@ -69,7 +75,15 @@ fn example_logs_replay_with_and_without_truth() {
     );
     ok(
         &root,
-        &["log", "example", "ins-dvl", "ins", "--duration", "60"],
+        &[
+            "log",
+            "example",
+            "ins-dvl",
+            "--out",
+            "ins",
+            "--duration",
+            "60",
+        ],
     );
     ok(
         &root,
@@ -77,6 +91,7 @@ fn example_logs_replay_with_and_without_truth() {
             "log",
             "example",
             "ins-dvl",
+            "--out",
             "ins-nt",
             "--duration",
             "60",
@@ -88,7 +103,7 @@ fn example_logs_replay_with_and_without_truth() {
     // Writing over an existing log is refused.
     usage_error(
         &root,
-        &["log", "example", "ins-dvl", "ins"],
+        &["log", "example", "ins-dvl", "--out", "ins"],
         &["exists already"],
     );
 
@@ -108,7 +123,8 @@ fn example_logs_replay_with_and_without_truth() {
         report.contains("Position error against `truth.csv` (3D, m)"),
         "{report}"
     );
-    // The filters beat dead reckoning on the example (DVL with a 1 % scale error).
+    // The filters beat dead reckoning on the example (the heading's random walk lets
+    // dead reckoning drift) and reject exactly the injected outliers.
     let s = summary(&root.join("o-rb"));
     assert_eq!(s.experiment, "range-beacon");
     assert_eq!(s.extra["error"], "3D");
@@ -120,6 +136,12 @@ fn example_logs_replay_with_and_without_truth() {
             mean(m),
             mean("DR")
         );
+        assert_eq!(s.row(m, "rejected").unwrap().value, injected, "{m}");
+    }
+    // Simulated with the noise of the built-in settings: every filter is consistent.
+    assert!(!s.claims.is_empty());
+    for c in &s.claims {
+        assert!(c.holds, "{}: {}", c.id, c.detail);
     }
     let est = read(&root.join("o-rb"), "estimates.csv");
     assert!(est.starts_with("time[s],true_north[m],true_east[m],true_down[m],DR_north[m]"));
@@ -193,7 +215,15 @@ fn corrupted_logs_name_file_line_and_column() {
     let root = scratch("own-logs-bad");
     ok(
         &root,
-        &["log", "example", "range-beacon", "good", "--duration", "30"],
+        &[
+            "log",
+            "example",
+            "range-beacon",
+            "--out",
+            "good",
+            "--duration",
+            "30",
+        ],
     );
     let ranges = read(&root.join("good"), "ranges.csv");
     let copy = |name: &str, file: &str, text: &str| {
@@ -251,7 +281,7 @@ fn corrupted_logs_name_file_line_and_column() {
         usage_error(&root, &["log", "check", dir], want);
     }
     // Nothing was written for a refused log.
-    assert!(!root.join("range-beacon-replay").exists());
+    assert!(!root.join("fathom-out/range-beacon-replay").exists());
     // Negative control: the untouched copy replays.
     ok(&root, &["replay", "range-beacon", "good"]);
 }
@@ -271,7 +301,7 @@ fn missing_plaza_folder_is_an_error_not_an_empty_report() {
     );
     usage_error(
         &root,
-        &["log", "from-plaza", "no/such/plaza", "x"],
+        &["log", "from-plaza", "no/such/plaza", "--out", "x"],
         &["no/such/plaza"],
     );
 }
@@ -281,7 +311,7 @@ fn plaza_through_the_layout_gives_the_plaza_numbers() {
     let plaza = repo_root().join("data/plaza1");
     let root = scratch("own-logs-plaza");
     let p = plaza.display().to_string();
-    ok(&root, &["log", "from-plaza", &p, "p-csv"]);
+    ok(&root, &["log", "from-plaza", &p, "--out", "p-csv"]);
     let config = repo_root().join("scenarios/range-beacon-plaza.toml");
     let own = ok(
         &root,
@@ -334,7 +364,15 @@ fn own_log_replay_keeps_a_users_file_in_out() {
     let root = scratch("own-logs-out");
     ok(
         &root,
-        &["log", "example", "range-beacon", "rb", "--duration", "60"],
+        &[
+            "log",
+            "example",
+            "range-beacon",
+            "--out",
+            "rb",
+            "--duration",
+            "60",
+        ],
     );
     std::fs::create_dir_all(root.join("o")).unwrap();
     std::fs::write(root.join("o/notes.md"), "my own notes").unwrap();
@@ -415,11 +453,27 @@ fn every_replay_writes_the_outputs_of_a_run() {
     let root = scratch("own-logs-outputs");
     ok(
         &root,
-        &["log", "example", "range-beacon", "rb", "--duration", "60"],
+        &[
+            "log",
+            "example",
+            "range-beacon",
+            "--out",
+            "rb",
+            "--duration",
+            "60",
+        ],
     );
     ok(
         &root,
-        &["log", "example", "ins-dvl", "ins", "--duration", "60"],
+        &[
+            "log",
+            "example",
+            "ins-dvl",
+            "--out",
+            "ins",
+            "--duration",
+            "60",
+        ],
     );
     let plaza = repo_root().join("data/plaza1").display().to_string();
     let common = ["estimate_vs_truth.svg", "error_3sigma.svg", "nis.svg"];

@@ -26,12 +26,9 @@ fn json(path: &Path) -> serde_json::Value {
 
 /// The offline run with the MAVLink quantization, through the binary.
 fn offline_quantized(dir: &Path, file: &str) -> String {
-    let r = fathom(
-        dir,
-        &["pils", "offline", file, "--quantized", "--out", "q.csv"],
-    );
+    let r = fathom(dir, &["pils", "offline", file, "--quantized", "--out", "q"]);
     assert_eq!(r.code, 0, "{}", r.stderr);
-    std::fs::read_to_string(dir.join("q.csv")).unwrap()
+    std::fs::read_to_string(dir.join("q/solutions.csv")).unwrap()
 }
 
 /// `fathom pils FILE`: the parent prints both addresses on stderr first.
@@ -312,17 +309,16 @@ fn compare_writes_per_run_table_and_paired_interval() {
     )
     .replace("side_m = 50.0", "side_m = 35.0\nheight_m = 5.0");
     std::fs::write(dir.join("rt.toml"), file).unwrap();
-    let r = fathom(
-        &dir,
-        &["pils", "compare", "rt.toml", "--runs", "2", "--out", "cmp"],
-    );
+    let r = fathom(&dir, &["pils", "compare", "rt.toml", "--runs", "2"]);
+    // Without `--out`: the one default place, `fathom-out/pils-compare`.
+    let cmp = dir.join("fathom-out/pils-compare");
     assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
     assert!(
         r.stdout.contains("realtime - lockstep (paired)"),
         "{}",
         r.stdout
     );
-    let c = json(&dir.join("cmp/comparison.json"));
+    let c = json(&cmp.join("comparison.json"));
     let runs = c["runs"].as_array().unwrap();
     assert_eq!(runs.len(), 2);
     for run in runs {
@@ -354,7 +350,7 @@ fn compare_writes_per_run_table_and_paired_interval() {
         .sum::<f64>()
         / 2.0;
     assert!((diff - mean).abs() < 1e-12, "{diff} {mean}");
-    let summary = json(&dir.join("cmp/summary.json"));
+    let summary = json(&cmp.join("summary.json"));
     assert!(
         summary["rows"]
             .as_array()
@@ -363,7 +359,7 @@ fn compare_writes_per_run_table_and_paired_interval() {
             .any(|r| r["method"] == "realtime-lockstep/MGPMF" && r["metric"] == "rmse_3d")
     );
     assert_eq!(
-        std::fs::read_to_string(dir.join("cmp/runs.csv"))
+        std::fs::read_to_string(cmp.join("runs.csv"))
             .unwrap()
             .lines()
             .count(),
@@ -379,7 +375,7 @@ fn compare_writes_per_run_table_and_paired_interval() {
         "run000_lockstep/sim/error_3d.svg",
         "run_info.json",
     ] {
-        assert!(dir.join("cmp").join(f).is_file(), "{f}");
+        assert!(cmp.join(f).is_file(), "{f}");
     }
 }
 

@@ -273,19 +273,22 @@ fn renumbered_beacons_and_shifted_clock_give_identical_errors() {
     assert!(!close(sc_a, sc_c), "moving a beacon must change the errors");
 }
 
+/// The data ships in the repository: `cargo xtask paper` refuses a missing data
+/// folder (naming the key) instead of skipping the experiment.
 #[test]
-fn missing_data_folder_skips_the_experiment() {
-    let root = scratch("plaza-skip");
+fn missing_data_folder_is_refused_not_skipped() {
+    let root = scratch("plaza-missing");
     let scenario =
         preset("plaza.toml").replace("dir = \"data/plaza1\"", "dir = \"no/such/plaza/folder\"");
     write_scenario(&root, "plaza.toml", &scenario);
-    let result = run_experiment(&root, "plaza", Some(1)).unwrap();
-    let summary = &result.experiments[0].summary;
-    assert_eq!(summary.runs, 0);
-    assert!(summary.rows.is_empty());
-    let report = std::fs::read_to_string(root.join("out/plaza/report.md")).unwrap();
-    assert!(report.contains("**Skipped:**"), "{report}");
-    assert!(report.contains("no/such/plaza/folder"), "{report}");
+    let e = run_experiment(&root, "plaza", Some(1)).unwrap_err();
+    assert!(e.is_user_error());
+    let s = crate::support::chain(&e);
+    assert!(
+        s.contains("data.dir") && s.contains("no/such/plaza/folder"),
+        "{s}"
+    );
+    assert!(!root.join("out/plaza/summary.json").exists());
 }
 
 #[test]

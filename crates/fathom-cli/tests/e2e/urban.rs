@@ -182,11 +182,16 @@ fn preset_rows_claims_figures_and_report() {
     }
 }
 
-/// The preset's shared sections with `body` as the only scenario (no ablations).
+/// The preset's shared sections with `body` as the only scenario and no
+/// `[ablations]` table (optional in a user's file).
 fn user_scenario(body: &str) -> String {
     let text = preset("urban.toml").replace("runs = 50 ", "runs = 2 ");
     let head = text.split("[[scenarios]]").next().unwrap();
-    format!("{head}\n{body}\n[ablations]\nruns = 2\n")
+    assert!(
+        !head.contains("[ablations]"),
+        "the ablations follow the scenarios"
+    );
+    format!("{head}\n{body}\n")
 }
 
 fn block(world: &str, waypoints: &str) -> String {
@@ -337,7 +342,8 @@ fn methods_select_the_methods_run(dir: &Path, full: &[serde_json::Value]) {
 }
 
 /// Path through the building, a waypoint outside the mesh, an OBJ without faces, a
-/// missing file: exit 2 and one line naming the file and the problem.
+/// missing file: exit 2 and one line naming the file and the problem, from `run` and
+/// from `check` alike.
 #[test]
 fn bad_user_worlds_are_one_line_usage_errors() {
     let dir = scratch("urban-obj-bad");
@@ -382,5 +388,12 @@ fn bad_user_worlds_are_one_line_usage_errors() {
             "{file}: {msg}"
         );
         assert!(msg.contains(file), "{file}: {msg}");
+        // `check` loads the world as `run` does: the same exit code and message.
+        let checked = fathom(&dir, &["check", file]);
+        assert_eq!(
+            (checked.code, checked.stderr.trim()),
+            (2, msg),
+            "{file}: check {checked:?}"
+        );
     }
 }

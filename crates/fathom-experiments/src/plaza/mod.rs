@@ -5,10 +5,9 @@
 //! The data ships in the repository. The folder named by `[data] dir` in
 //! `scenarios/plaza.toml` (default `data/plaza1`) is looked up inside the base
 //! directory (the workspace root; the current directory for `fathom run`) and beside
-//! each of its ancestors. When it is absent, `fathom run` refuses the scenario (a
-//! user error naming `data.dir`); `cargo xtask paper` (whose environment sets
-//! `skip_missing_data`) **skips** the experiment: it has no batch to run, its summary
-//! has no rows (`runs = 0`) and the report says why.
+//! each of its ancestors. When it is absent, `fathom run` and `cargo xtask paper`
+//! refuse the scenario (a user error naming `data.dir`): the experiment is never
+//! skipped.
 //!
 //! Files: `analysis` (rows and claims), `figures`, `report`; the replay itself lives in
 //! [`fathom_replay::plaza`], shared with `fathom replay plaza`.
@@ -34,11 +33,11 @@ pub use analysis::{
     smoothed_name,
 };
 
-/// The settings and the log (or why it is absent).
+/// The settings and the log.
 #[derive(Debug)]
 pub struct Prepared {
     settings: PlazaSettings,
-    data: Result<(PathBuf, PlazaLog), String>,
+    data: (PathBuf, PlazaLog),
 }
 
 /// The `plaza` experiment.
@@ -58,6 +57,8 @@ impl Experiment for Plaza {
     const DEFAULT_SCENARIO: &'static str = "scenarios/plaza.toml";
     const PRESET: &'static str = include_str!("../../../../scenarios/plaza.toml");
     const ABOUT: &'static str = "range-beacon localization on real data (CMU Plaza1): dead reckoning vs AS / SC / SI with range calibration and robust gating";
+    // `check` reads the data folder as a run does.
+    const CHECK_PREPARES: bool = true;
 
     fn check(&self, scenario: &PlazaToml, file: &str) -> Result<PlazaSettings, SimError> {
         scenario.check(file)
@@ -68,43 +69,28 @@ impl Experiment for Plaza {
     }
 
     fn prepare(&self, settings: PlazaSettings, env: &Environment) -> Result<Prepared, SimError> {
-        let data = match find_data_dir(&env.base_dir, &settings.data_dir) {
-            None if !env.skip_missing_data => {
-                return Err(SimError::invalid_argument(
-                    "data folder",
-                    format!(
-                        "`{}` (key `data.dir`) is not found in `{}` or beside any of its \
-                         ancestors; put the data set's three files (`*_DR.txt`, `*_TD.txt`, \
-                         `*_.mat`) there, or run `fathom replay plaza <dir>` on the folder \
-                         holding them",
-                        settings.data_dir,
-                        env.base_dir.display()
-                    ),
-                ));
-            }
-            None => Err(format!(
-                "data folder `{}` not found in `{}` or beside any of its ancestors. The Plaza \
-                 data is not part of the repository; put the data set's three files \
-                 (`*_DR.txt`, `*_TD.txt`, `*_.mat`) in that folder, or run `fathom replay \
-                 plaza <dir>` on any folder holding them",
-                settings.data_dir,
-                env.base_dir.display()
-            )),
-            Some(dir) => {
-                let log = PlazaLog::read_dir(&dir, settings.range_order).map_err(|e| {
-                    SimError::model(format!("reading the Plaza data in `{}`", dir.display()), e)
-                })?;
-                Ok((dir, log))
-            }
-        };
+        let dir = find_data_dir(&env.base_dir, &settings.data_dir).ok_or_else(|| {
+            SimError::invalid_argument(
+                "data folder",
+                format!(
+                    "`{}` (key `data.dir`) is not found in `{}` or beside any of its \
+                     ancestors; put the data set's three files (`*_DR.txt`, `*_TD.txt`, \
+                     `*_.mat`) there, or run `fathom replay plaza <dir>` on the folder \
+                     holding them",
+                    settings.data_dir,
+                    env.base_dir.display()
+                ),
+            )
+        })?;
+        let log = PlazaLog::read_dir(&dir, settings.range_order).map_err(|e| {
+            SimError::model(format!("reading the Plaza data in `{}`", dir.display()), e)
+        })?;
+        let data = (dir, log);
         Ok(Prepared { settings, data })
     }
 
-    fn batches(&self, p: &Prepared) -> Vec<Batch> {
-        match &p.data {
-            Ok(_) => vec![Batch::new(Self::NAME, 1)],
-            Err(_) => Vec::new(),
-        }
+    fn batches(&self, _p: &Prepared) -> Vec<Batch> {
+        vec![Batch::new(Self::NAME, 1)]
     }
 
     fn run(
@@ -114,10 +100,7 @@ impl Experiment for Plaza {
         _index: usize,
         _rng: &mut ChaCha8Rng,
     ) -> Result<PlazaReplay, SimError> {
-        match &p.data {
-            Ok((_, log)) => replay(log, &p.settings),
-            Err(reason) => Err(SimError::invalid_argument("plaza data", reason.clone())),
-        }
+        replay(&p.data.1, &p.settings)
     }
 
     fn fold(
@@ -138,18 +121,12 @@ impl Experiment for Plaza {
         _folds: Vec<()>,
         out: &mut Analysis,
     ) -> Result<(), SimError> {
-        let (dir, r) = match (&p.data, records.first_mut().and_then(|b| b.pop())) {
-            (Ok((dir, _)), Some(r)) => (dir, r),
-            (Err(reason), _) => {
-                out.skip(reason.clone());
-                return Ok(());
-            }
-            (Ok(_), None) => {
-                return Err(SimError::invalid_argument(
-                    "plaza",
-                    "the replay did not run",
-                ));
-            }
+        let dir = &p.data.0;
+        let Some(r) = records.first_mut().and_then(|b| b.pop()) else {
+            return Err(SimError::invalid_argument(
+                "plaza",
+                "the replay did not run",
+            ));
         };
         analysis::rows_and_claims(&r, out);
         figures::write(&r, out)?;

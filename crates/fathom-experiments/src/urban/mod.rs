@@ -78,6 +78,8 @@ impl Experiment for Urban {
         "PF",
     ];
     const ABOUT: &'static str = "map-aided quadrotor navigation under a bridge and around buildings: INS, GPS/INS with and without the LOS test, switching GREKF / MGPMF / particle filter (seed 004, Fig. 8-10, Table 2)";
+    // `check` loads the worlds and tests the waypoints against them as a run does.
+    const CHECK_PREPARES: bool = true;
 
     fn check(&self, scenario: &UrbanScenario, file: &str) -> Result<check::Checked, SimError> {
         scenario.check(file)

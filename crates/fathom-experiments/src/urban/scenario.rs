@@ -72,7 +72,9 @@ pub struct UrbanScenario {
     pub evaluation: EvaluationToml,
     /// The worlds and paths, one entry each (the paper: `bridge` and `buildings`).
     pub scenarios: Vec<SceneToml>,
-    /// Ablations the paper motivates (extra batches on one scenario and method).
+    /// Ablations the paper motivates (extra batches on one scenario and method); none
+    /// when absent.
+    #[serde(default)]
     pub ablations: AblationsToml,
     /// `[statistics]`: how the runs of each row are summarized (bootstrap resamples,
     /// divergence factor); defaults when absent.
@@ -635,12 +637,14 @@ pub struct PathToml {
 /// `[ablations]`: extra batches of `runs` runs on one scenario and method, each run
 /// drawing the same random numbers as the main batch's run of the same index (paired
 /// differences).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct AblationsToml {
     /// Runs of each ablation batch.
     ///
-    /// Range: 2 … `runs` (after `--runs`, capped at it).
+    /// Range: 2 … `runs` (after `--runs`, capped at it) when an ablation is listed.
+    /// Default: 0 (no ablation).
+    #[serde(default)]
     pub runs: usize,
     /// Range noise Gaussian only (glass treated as opaque: no extra noise, no
     /// incidence cut-off) against the main batch's glass effects (the paper calls

@@ -32,6 +32,8 @@ impl Experiment for InsDvl {
     const PRESET: &'static str = INS_DVL_PRESET;
     const ABOUT: &'static str = "INS / DVL navigation on your own log (docs/own-data.md): pure INS, INS-DVL, the RPM velocity filter and the 15-state ESKF, with or without ground truth";
     const PAPER: bool = false;
+    // `check` reads the log as a replay does.
+    const CHECK_PREPARES: bool = true;
 
     fn check(&self, scenario: &InsDvlToml, file: &str) -> Result<InsDvlSettings, SimError> {
         scenario.check(file)

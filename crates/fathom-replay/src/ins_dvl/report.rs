@@ -11,7 +11,7 @@ use crate::own_log::notes;
 pub(super) fn notes(r: &InsDvlReplay, dir: &Path) -> String {
     let mut md = format!(
         "### Log\n\n`{}` (kind `ins-dvl`); rows read: {} IMU, {} DVL, {} depth, {} altitude, \
-         {} RPM, {} truth. IMU {}; {} recording instants; {} DVL rows invalid (flag 0 or \
+         {} RPM, {} truth. IMU {}; {} recording instants; {} DVL row{} invalid (flag 0 or \
          altitude beyond the DVL's range).\n\n",
         dir.display(),
         r.rows[0],
@@ -26,7 +26,8 @@ pub(super) fn notes(r: &InsDvlReplay, dir: &Path) -> String {
             "rates"
         },
         r.times.len(),
-        r.invalid_dvl_rows
+        r.invalid_dvl_rows,
+        if r.invalid_dvl_rows == 1 { "" } else { "s" }
     );
     md.push_str(&notes::methods(
         r.methods.iter().map(|m| (m.name(), describe(m))),

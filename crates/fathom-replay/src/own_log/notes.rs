@@ -23,7 +23,9 @@ pub fn innovations(with_truth: bool) -> String {
          squared (NIS) of each filter's measurements of one kind, divided by its degrees \
          of freedom: a consistent filter averages 1, inside the 95 % interval that its \
          check names, with about 5 % of values beyond the chi-square 95 % quantile \
-         (`beyond_95` = 0.05). The figures `nis*.svg` show it over time against that \
+         (`beyond_95` = 0.05). For ranges they cover the accepted ones: a range the \
+         robust filter rejected (beyond `robust.reject_sigma`) is counted in `rejected` \
+         instead. The figures `nis*.svg` show it over time against that \
          interval, `innovations*.svg` the innovations against the ±3√S the filter \
          predicted for them.\n",
     );

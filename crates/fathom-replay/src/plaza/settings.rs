@@ -52,8 +52,9 @@ pub struct PlazaToml {
 pub struct DataToml {
     /// The data folder for `cargo xtask paper` and `fathom run`: an absolute path, or a
     /// relative one looked up inside the workspace root (`fathom run`: the current
-    /// directory), then beside each of its ancestors, nearest first; the experiment is
-    /// skipped when it is not found. `fathom replay plaza <dir>` ignores it.
+    /// directory), then beside each of its ancestors, nearest first; a folder that is
+    /// not found is an error. `fathom replay plaza <dir>` ignores it (without `<dir>`
+    /// it uses this folder).
     ///
     /// Range: a path.
     pub dir: String,

@@ -21,7 +21,7 @@ pub(super) fn error_kind(r: &RangeBeaconReplay) -> &'static str {
 }
 
 /// Per method: the position error (with truth), the ranges accepted and rejected
-/// (filters), the NIS of the ranges and depths with their checks; the extra keys
+/// (filters), the NIS of the accepted ranges and of the depths with their checks; the extra keys
 /// `with_truth`, `error` (`3D` or `horizontal`), `instants`, `methods` (what each
 /// runs) and `rows_read`.
 pub(super) fn rows(r: &RangeBeaconReplay, out: &mut Analysis) {
@@ -35,8 +35,10 @@ pub(super) fn rows(r: &RangeBeaconReplay, out: &mut Analysis) {
             out.row(Row::new(name, "accepted", m.trace.counts.accepted as f64));
             out.row(Row::new(name, "rejected", m.trace.counts.rejected as f64));
         }
-        if let Some(n) = m.range_nis {
-            nis_rows(out, name, "ranges", "ranges", n);
+        // The ranges the filter applied: a rejected range is beyond the model by the
+        // filter's own test (counted in `rejected`), not evidence of inconsistency.
+        if let Some(n) = m.accepted_nis {
+            nis_rows(out, name, "ranges", "accepted ranges", n);
         }
         if let Some(n) = m.depth_nis {
             nis_rows(out, name, "depth", "depths", n);

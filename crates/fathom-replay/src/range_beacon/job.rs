@@ -36,6 +36,8 @@ impl Experiment for RangeBeacon {
     const PRESET: &'static str = RANGE_BEACON_PRESET;
     const ABOUT: &'static str = "range-beacon localization on your own log (docs/own-data.md): dead reckoning and the EKF under AS / SC / SI, with or without ground truth";
     const PAPER: bool = false;
+    // `check` reads the log as a replay does.
+    const CHECK_PREPARES: bool = true;
 
     fn check(
         &self,

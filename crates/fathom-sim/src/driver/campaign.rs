@@ -24,9 +24,10 @@ use crate::SimError;
 use crate::experiment::{
     Assessed, Batch, DynExperiment, FoundRecord, Job, RecordSink, RecordSource, Shard,
 };
+use fathom_report::output::write_text;
 
-/// Version of the shard folder layout.
-pub const FORMAT: u32 = 1;
+/// Version of the shard folder layout (2: the manifest holds the scenario as given).
+pub const FORMAT: u32 = 2;
 
 /// One batch of a shard: its label, its size, and the run indices the shard ran.
 #[derive(Debug, Clone, PartialEq, Eq, Serialize, Deserialize)]
@@ -56,6 +57,10 @@ pub struct Manifest {
     pub scenario_sha256: String,
     /// The resolved scenario (runs and seed folded in): what every shard must share.
     pub resolved_scenario: String,
+    /// The scenario file as given, written by the merge as `scenario.toml` (what a
+    /// single run writes). Absent from older manifests, which [`FORMAT`] refuses.
+    #[serde(default)]
+    pub scenario_text: String,
     /// The base seed (`None`: a deterministic experiment).
     pub base_seed: Option<u64>,
     /// This shard.
@@ -190,6 +195,7 @@ pub fn run_assessed_shard(
         scenario_label: job.file.to_string(),
         scenario_sha256: sha256_hex(&plan.resolved.toml),
         resolved_scenario: plan.resolved.toml.clone(),
+        scenario_text: job.text.to_string(),
         base_seed: plan.resolved.base_seed,
         shard,
         batches: sink.batches,
@@ -199,7 +205,7 @@ pub fn run_assessed_shard(
         path: dir.join("manifest.json"),
         source: e,
     })?;
-    fathom_report::output::write_text(claim.dir().join("manifest.json"), &(json + "\n"))?;
+    write_text(claim.dir().join("manifest.json"), &(json + "\n"))?;
     claim.commit(RunInfo {
         fathom_version: manifest.fathom_version.clone(),
         command: "shard".into(),
@@ -437,6 +443,13 @@ pub fn merge(
         &setup,
         claim.dir(),
         elapsed,
+    )?;
+    // The scenario files of a single run (`execute_assessed_to`): the merged folder
+    // holds the same set of files.
+    write_text(claim.dir().join("scenario.toml"), &first.scenario_text)?;
+    write_text(
+        claim.dir().join("scenario.resolved.toml"),
+        &(super::resolved_header(exp.name()) + &result.resolved_toml),
     )?;
     result.relocate(&claim);
     claim.commit(RunInfo {

@@ -56,8 +56,6 @@ pub struct ExperimentResult {
     pub elapsed: Duration,
     /// The resolved scenario (TOML) with the overrides applied.
     pub resolved_toml: String,
-    /// Why the experiment was skipped, if it was (e.g. its data folder is absent).
-    pub skipped: Option<String>,
     /// The unit of each metric, as the experiment declared it.
     pub units: BTreeMap<String, String>,
     /// Whether the scenario is the paper's setup, or which keys differ from it.
@@ -243,7 +241,6 @@ pub(crate) fn write_executed(
         figures,
         elapsed,
         resolved_toml: executed.resolved.toml.clone(),
-        skipped: executed.analysis.skipped.clone(),
         units: executed.analysis.units.clone(),
         setup: setup.clone(),
         paper: framing.paper,

@@ -159,11 +159,7 @@ fn run_one(options: &PaperOptions, exp: &dyn DynExperiment) -> Result<Experiment
         seed: None,
         threads: options.threads,
         progress: None,
-        env: Environment {
-            // A checkout without a data set skips that experiment, with a note.
-            skip_missing_data: true,
-            ..Environment::new(options.workspace_root.clone())
-        },
+        env: Environment::new(options.workspace_root.clone()),
     };
     let write = WriteOptions {
         force: options.force,

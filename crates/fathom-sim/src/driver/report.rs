@@ -273,9 +273,6 @@ pub(crate) fn experiment_report(
     );
     md.push_str(&setup_sentence(s, setup, framing));
     md.push_str("\n\n");
-    if let Some(reason) = &analysis.skipped {
-        md.push_str(&format!("**Skipped:** {reason}\n\n"));
-    }
     md.push_str(match (framing.paper, setup.is_paper()) {
         (false, _) => "## Results\n\n",
         (true, true) => "## Paper versus reproduced\n\n",
@@ -355,9 +352,6 @@ pub fn console_section(r: &ExperimentResult) -> String {
         )
     };
     t.push_str(&console_setup(r));
-    if let Some(reason) = &r.skipped {
-        t.push_str(&format!("skipped: {reason}\n"));
-    }
     t.push_str(&console_rows(r));
     t.push_str(&console_claims(r));
     t.push('\n');

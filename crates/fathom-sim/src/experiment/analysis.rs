@@ -133,7 +133,6 @@ pub struct Analysis {
     pub(crate) extra: serde_json::Map<String, serde_json::Value>,
     pub(crate) report: String,
     pub(crate) files: Vec<OutputFile>,
-    pub(crate) skipped: Option<String>,
     pub(crate) units: std::collections::BTreeMap<String, String>,
     /// Metrics declared signed (their mean's interval is Student-t).
     pub(crate) signed: std::collections::BTreeSet<String>,
@@ -192,12 +191,6 @@ impl Analysis {
     /// the generated sections use `##`).
     pub fn report(&mut self, markdown: &str) {
         self.report.push_str(markdown);
-    }
-
-    /// Marks the experiment as skipped (e.g. its data folder is absent), with the
-    /// reason; the driver prints it and the report says so.
-    pub fn skip(&mut self, reason: impl Into<String>) {
-        self.skipped = Some(reason.into());
     }
 
     /// Renders `figure` as the SVG file `name`.

@@ -142,6 +142,8 @@ pub trait DynExperiment: Send + Sync {
     fn preset(&self) -> &'static str;
     /// [`Experiment::PAPER`].
     fn paper(&self) -> bool;
+    /// [`Experiment::CHECK_PREPARES`].
+    fn check_prepares(&self) -> bool;
     /// The JSON schema of the scenario file (field docs as descriptions), from which
     /// `docs/scenarios.md` is generated.
     fn schema(&self) -> schemars::Schema;
@@ -551,6 +553,10 @@ impl<E: Experiment> DynExperiment for E {
 
     fn paper(&self) -> bool {
         E::PAPER
+    }
+
+    fn check_prepares(&self) -> bool {
+        E::CHECK_PREPARES
     }
 
     fn schema(&self) -> schemars::Schema {

@@ -144,18 +144,14 @@ impl Batch {
     }
 }
 
-/// What an execution takes from outside the scenario file: where data folders are,
-/// what to do when one is missing, and the limits a scenario must fit.
+/// What an execution takes from outside the scenario file: where data folders are
+/// and the limits a scenario must fit.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Environment {
     /// Relative data folders of a scenario are looked up here and beside each of its
     /// ancestors (the workspace root for `cargo xtask paper`, the current directory
     /// for `fathom run`).
     pub base_dir: PathBuf,
-    /// A data folder that is not found skips the experiment (with a note in its
-    /// report) instead of being an error: `cargo xtask paper` on a checkout without
-    /// the data. `fathom run` refuses a missing folder.
-    pub skip_missing_data: bool,
     /// The limits the scenario's estimated cost must fit ([`crate::cost`]).
     pub limits: Limits,
 }
@@ -165,7 +161,6 @@ impl Environment {
     pub fn new(base_dir: impl Into<PathBuf>) -> Self {
         Environment {
             base_dir: base_dir.into(),
-            skip_missing_data: false,
             limits: Limits::default(),
         }
     }
@@ -212,6 +207,11 @@ pub trait Experiment: Clone + Send + Sync + 'static {
     /// built-in settings, and the report and console say so instead of comparing with
     /// a paper.
     const PAPER: bool = true;
+    /// Whether [`Experiment::prepare`] reads the user's files (a world, a data folder,
+    /// a log) and is cheap: `fathom check` then prepares the scenario too, so that a
+    /// file it accepts is one `fathom run` starts. Experiments whose preparation only
+    /// computes (and may take long) leave it `false`.
+    const CHECK_PREPARES: bool = false;
 
     /// Validates `scenario` (`file` labels error messages). Fast and free of I/O.
     ///
