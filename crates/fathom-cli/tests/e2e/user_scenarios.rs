@@ -14,7 +14,7 @@ fn readme_beacons_table() -> String {
     for cmd in [
         "fathom check scenarios/beacons.toml",
         "cp scenarios/beacons.toml my_beacons.toml",
-        "fathom run my_beacons.toml --runs 20 --out out/my_beacons",
+        "fathom run my_beacons.toml --runs 20 --out fathom-out/my_beacons",
         "cargo build --release -p fathom-cli",
     ] {
         assert!(readme.contains(cmd), "README lost the step `{cmd}`");
