@@ -50,6 +50,26 @@ pub fn echo(text: &str) -> Echo<'_> {
     }
 }
 
+/// Characters of one printed error line before it is cut: the guard of a front end
+/// over messages of crates that do not bound their echoes themselves.
+pub const MAX_LINE_CHARS: usize = 1000;
+
+/// Each line of `text` bounded at [`MAX_LINE_CHARS`], its backtick-quoted spans as
+/// [`echo_message`] bounds them; line breaks are kept.
+pub fn echo_lines(text: &str) -> String {
+    text.lines()
+        .map(|line| {
+            Echo {
+                text: line,
+                max: MAX_LINE_CHARS,
+                quoted_max: MAX_PATH_CHARS,
+            }
+            .to_string()
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 /// A message bounded at [`MAX_MESSAGE_CHARS`], each span it quotes in backticks (a
 /// parser's echo of the input) at [`MAX_PATH_CHARS`] as [`echo_file`] bounds a path
 /// (so that a value or path echoed already is left as it is).
@@ -246,6 +266,18 @@ mod tests {
         assert_eq!(echo_message(&echoed).to_string(), echoed);
         // A plain value keeps its backticks as they are.
         assert_eq!(echo("a`b`c").to_string(), "a`b`c");
+    }
+
+    #[test]
+    fn printed_lines_are_bounded_each() {
+        let text = format!("cannot write `{}`\nsecond", "p".repeat(20_000));
+        let shown = echo_lines(&text);
+        assert_eq!(shown.lines().count(), 2);
+        assert!(
+            shown.lines().all(|l| l.len() <= MAX_LINE_CHARS + 30),
+            "{shown}"
+        );
+        assert_eq!(echo_lines("a\nb"), "a\nb");
     }
 
     #[test]

@@ -88,6 +88,14 @@ fn world_names_paths_and_scenario_values_are_echoed_bounded() {
     let text = format!("{name} = 1\n{}", urban_with_world("w.obj"));
     std::fs::write(dir.join("key.toml"), text).unwrap();
     bounded_usage_error(&dir, &["check", "key.toml"], "key.toml");
+    // A 20 kB output folder (the output crate's own message, bounded where printed).
+    let out = format!("{}/o", bomb(20_000));
+    std::fs::write(dir.join("b.toml"), preset("beacons.toml")).unwrap();
+    let ran = fathom(&dir, &["run", "b.toml", "--runs", "2", "--out", &out]);
+    assert_ne!(ran.code, 0, "{ran:?}");
+    let msg = ran.stderr.trim_end();
+    assert!(msg.len() <= 1024 && longest_bomb_run(msg) <= 200, "{msg}");
+    assert!(msg.contains("QQQ"), "{msg}");
     // A 20 kB scenario file name on the command line.
     bounded_usage_error(
         &dir,

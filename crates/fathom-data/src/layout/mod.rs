@@ -273,10 +273,6 @@ impl FileSet {
     }
 }
 
-/// Checks that `table` has exactly one row (`initial.csv`).
-///
-/// # Errors
-
 /// Reads one file of a log folder as [`read_regular_file`] does.
 ///
 /// # Errors
@@ -319,6 +315,9 @@ pub fn read_regular_file(path: &Path) -> std::io::Result<Vec<u8>> {
     Ok(bytes)
 }
 
+/// Checks that `table` has exactly one row (`initial.csv`).
+///
+/// # Errors
 /// [`LogError::Inconsistent`] naming the file and the row count.
 pub fn single_row(table: &Table, path: &Path) -> Result<(), LogError> {
     if table.len() == 1 {
