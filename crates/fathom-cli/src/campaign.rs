@@ -6,8 +6,9 @@ use anyhow::{Context, anyhow};
 use clap::{Args, Subcommand};
 use fathom_experiments::registry;
 use fathom_sim::driver::campaign::{merge, read_manifest, run_assessed_shard, slurm_script};
+use fathom_sim::error_chain;
 use fathom_sim::experiment::{Environment, Job, Shard};
-use fathom_sim::user_run::{assess_scenario, check_command};
+use fathom_sim::user_run::{assess_scenario, check_command, one_line};
 
 use crate::{Failure, RunArgs, failure, progress_bar, run_hook};
 
@@ -144,10 +145,43 @@ pub(crate) fn campaign_cmd(kind: &CampaignKind) -> Result<String, Failure> {
             "--runs and --shards must be at least 1"
         )));
     }
+    if args.runs < args.shards {
+        return Err(Failure::Usage(anyhow!(
+            "--runs {} is fewer than --shards {}: every shard needs at least one run",
+            args.runs,
+            args.shards
+        )));
+    }
     // The scenario must be valid before anything is submitted.
     let (code, line) = check_command(&args.scenario, &registry());
     if code != 0 {
         return Err(Failure::Usage(anyhow!(line)));
+    }
+    // ... and valid with the campaign's run count, as every shard will assess it.
+    let text = std::fs::read_to_string(&args.scenario)
+        .with_context(|| format!("cannot read `{}`", args.scenario.display()))
+        .map_err(Failure::Usage)?;
+    let label = args.scenario.display().to_string();
+    let job = Job {
+        text: &text,
+        file: &label,
+        runs: Some(args.runs),
+        seed: None,
+        threads: None,
+        progress: None,
+        env: Environment::new(
+            std::env::current_dir()
+                .context("cannot read the current directory")
+                .map_err(Failure::Run)?,
+        ),
+    };
+    if let Err(e) = assess_scenario(&job, &registry()) {
+        let line = one_line(&error_chain(&e));
+        return Err(Failure::Usage(if line.contains("--runs") {
+            anyhow!(line)
+        } else {
+            anyhow!("with --runs {}: {line}", args.runs)
+        }));
     }
     let dir = args.dir.display().to_string();
     let script = slurm_script(

@@ -109,6 +109,7 @@ use clap::{Args, Parser, Subcommand};
 use fathom_experiments::jobs;
 use fathom_sim::cost::Limits;
 use fathom_sim::driver::{console_claims, console_rows, console_setup};
+use fathom_sim::echo::echo_lines;
 use fathom_sim::experiment::Shard;
 use fathom_sim::progress::{Progress, ProgressEvent};
 use fathom_sim::user_run::{
@@ -462,12 +463,13 @@ fn main() -> ExitCode {
             print!("{text}");
             ExitCode::SUCCESS
         }
+        // Every line bounded, whichever crate's message it carries (issue #38).
         Err(Failure::Usage(e)) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", echo_lines(&format!("{e:#}")));
             ExitCode::from(2)
         }
         Err(Failure::Run(e)) => {
-            eprintln!("error: {e:#}");
+            eprintln!("error: {}", echo_lines(&format!("{e:#}")));
             ExitCode::from(1)
         }
     }

@@ -178,6 +178,11 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
             out,
             force,
         }) => {
+            if nav.port() == 0 || nav.ip().is_unspecified() {
+                return Err(Failure::Usage(anyhow!(
+                    "--nav {nav}: the navigation's address needs a host and a port (e.g. 127.0.0.1:14550)"
+                )));
+            }
             let s = load(scenario, None)?;
             let p = prepare(&s, scenario)?;
             let dir = claim(out, *force)?;
@@ -226,11 +231,12 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
             out,
         }) => {
             let s = load(scenario, method.as_deref())?;
-            let csv =
-                fathom_pils::session::offline_csv(&s, s.method, *quantized).map_err(run_err)?;
+            // The output folder is made before the run, so that a bad `--out` costs nothing.
             std::fs::create_dir_all(out)
                 .with_context(|| format!("cannot create `{}` (--out)", out.display()))
                 .map_err(Failure::Usage)?;
+            let csv =
+                fathom_pils::session::offline_csv(&s, s.method, *quantized).map_err(run_err)?;
             let file = out.join(OFFLINE_CSV);
             std::fs::write(&file, csv)
                 .with_context(|| format!("writing {}", file.display()))

@@ -25,6 +25,7 @@
 //! assert!(Gaussian::new(Vector2::zeros(), Matrix2::new(1.0, 2.0, 2.0, 1.0)).is_err());
 //! ```
 
+pub mod echo;
 pub mod error;
 pub mod frames;
 pub mod gaussian;

@@ -161,7 +161,7 @@ pub enum MatWriteError {
         reason: String,
     },
     /// Writing the file failed.
-    #[error("cannot write `{}`", path.display())]
+    #[error("cannot write `{}`", fathom_core::echo::echo_path(path))]
     Io {
         /// The file.
         path: std::path::PathBuf,

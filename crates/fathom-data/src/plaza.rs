@@ -22,6 +22,9 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+use fathom_core::echo::{echo_list, echo_message, echo_path};
+
+use crate::layout::read_regular_file;
 use crate::matv5::{MatArray, MatClass, read_mat_v5};
 
 /// Where in a file an error sits.
@@ -51,13 +54,16 @@ impl std::fmt::Display for Place {
 #[derive(Debug, thiserror::Error)]
 pub enum PlazaError {
     /// The data folder does not exist or is not a directory.
-    #[error("data folder `{}` does not exist or is not a directory", dir.display())]
+    #[error(
+        "data folder `{}` does not exist or is not a directory",
+        echo_path(dir)
+    )]
     NoFolder {
         /// The folder.
         dir: PathBuf,
     },
     /// No file with the expected suffix.
-    #[error("no `*{suffix}` file in `{}`", dir.display())]
+    #[error("no `*{suffix}` file in `{}`", echo_path(dir))]
     FileMissing {
         /// The folder searched.
         dir: PathBuf,
@@ -65,7 +71,11 @@ pub enum PlazaError {
         suffix: &'static str,
     },
     /// More than one file with the suffix.
-    #[error("more than one `*{suffix}` file in `{}`: {}", dir.display(), found.join(", "))]
+    #[error(
+        "more than one `*{suffix}` file in `{}`: {}",
+        echo_path(dir),
+        echo_list(found)
+    )]
     Ambiguous {
         /// The folder searched.
         dir: PathBuf,
@@ -75,7 +85,7 @@ pub enum PlazaError {
         found: Vec<String>,
     },
     /// Reading failed.
-    #[error("cannot read `{}`", path.display())]
+    #[error("cannot read `{}`", echo_path(path))]
     Io {
         /// The file.
         path: PathBuf,
@@ -84,7 +94,10 @@ pub enum PlazaError {
         source: std::io::Error,
     },
     /// A row has the wrong number of columns.
-    #[error("`{}` {place}: expected {expected} columns, found {found}", path.display())]
+    #[error(
+        "`{}` {place}: expected {expected} columns, found {found}",
+        echo_path(path)
+    )]
     ColumnCount {
         /// The file.
         path: PathBuf,
@@ -96,7 +109,11 @@ pub enum PlazaError {
         found: usize,
     },
     /// A field is not a finite number.
-    #[error("`{}` {place}: column {column} (`{name}`): {reason}", path.display())]
+    #[error(
+        "`{}` {place}: column {column} (`{name}`): {}",
+        echo_path(path),
+        echo_message(reason)
+    )]
     BadValue {
         /// The file.
         path: PathBuf,
@@ -112,7 +129,7 @@ pub enum PlazaError {
     /// Time does not increase.
     #[error(
         "`{}` {place}: time {time} s is not after the previous row's {previous} s (times must increase)",
-        path.display()
+        echo_path(path)
     )]
     NonMonotonicTime {
         /// The file.
@@ -127,8 +144,8 @@ pub enum PlazaError {
     /// A range names a beacon that the survey (`TL`) does not list.
     #[error(
         "`{}` {place}: unknown beacon id {id} (surveyed beacons in `TL`: {})",
-        path.display(),
-        known.iter().map(i64::to_string).collect::<Vec<_>>().join(", ")
+        echo_path(path),
+        echo_list(known)
     )]
     UnknownBeacon {
         /// The range file.
@@ -141,7 +158,7 @@ pub enum PlazaError {
         known: Vec<i64>,
     },
     /// The same beacon id twice in the survey.
-    #[error("`{}` {place}: beacon id {id} listed twice", path.display())]
+    #[error("`{}` {place}: beacon id {id} listed twice", echo_path(path))]
     DuplicateBeacon {
         /// The `.mat` file.
         path: PathBuf,
@@ -151,7 +168,7 @@ pub enum PlazaError {
         id: i64,
     },
     /// The file holds no data rows.
-    #[error("`{}`{}: no data rows", path.display(), matrix.as_ref().map(|m| format!(" matrix `{m}`")).unwrap_or_default())]
+    #[error("`{}`{}: no data rows", echo_path(path), matrix.as_ref().map(|m| format!(" matrix `{m}`")).unwrap_or_default())]
     Empty {
         /// The file.
         path: PathBuf,
@@ -159,7 +176,11 @@ pub enum PlazaError {
         matrix: Option<String>,
     },
     /// The `.mat` file cannot be parsed as MATLAB v5.
-    #[error("`{}`: not a readable MATLAB v5 file ({reason})", path.display())]
+    #[error(
+        "`{}`: not a readable MATLAB v5 file ({})",
+        echo_path(path),
+        echo_message(reason)
+    )]
     Mat {
         /// The file.
         path: PathBuf,
@@ -167,7 +188,11 @@ pub enum PlazaError {
         reason: String,
     },
     /// A required matrix is absent from the `.mat` file.
-    #[error("`{}`: no matrix `{name}` (found: {})", path.display(), found.join(", "))]
+    #[error(
+        "`{}`: no matrix `{name}` (found: {})",
+        echo_path(path),
+        echo_list(found)
+    )]
     MissingMatrix {
         /// The file.
         path: PathBuf,
@@ -177,7 +202,7 @@ pub enum PlazaError {
         found: Vec<String>,
     },
     /// A matrix has the wrong shape or type.
-    #[error("`{}`: matrix `{name}`: {reason}", path.display())]
+    #[error("`{}`: matrix `{name}`: {}", echo_path(path), echo_message(reason))]
     MatrixShape {
         /// The file.
         path: PathBuf,
@@ -361,9 +386,15 @@ impl PlazaLog {
 }
 
 fn read_text(path: &Path) -> Result<String, PlazaError> {
-    std::fs::read_to_string(path).map_err(|source| PlazaError::Io {
+    let io = |source| PlazaError::Io {
         path: path.to_path_buf(),
         source,
+    };
+    String::from_utf8(read_regular_file(path).map_err(io)?).map_err(|_| {
+        io(std::io::Error::new(
+            std::io::ErrorKind::InvalidData,
+            "stream did not contain valid UTF-8",
+        ))
     })
 }
 
@@ -732,7 +763,7 @@ fn poses(
 /// duplicate beacon id.
 pub fn read_mat(path: impl AsRef<Path>) -> Result<PlazaMat, PlazaError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| PlazaError::Io {
+    let bytes = read_regular_file(path).map_err(|source| PlazaError::Io {
         path: path.to_path_buf(),
         source,
     })?;

@@ -1,11 +1,13 @@
 //! Errors of the map crate: malformed mesh files (naming the line or face), invalid
 //! meshes and invalid parameters. Nothing in the crate panics on bad input.
 
+use fathom_core::echo::{echo, echo_file, echo_message};
+
 /// Errors of `fathom-map`; every variant names the element that failed.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MapError {
     /// An OBJ file could not be read at a line (1-based).
-    #[error("OBJ line {line}: {reason}")]
+    #[error("OBJ line {line}: {}", echo_message(reason))]
     ObjLine {
         /// 1-based line number.
         line: usize,
@@ -13,14 +15,15 @@ pub enum MapError {
         reason: String,
     },
     /// An OBJ file is malformed in a way no single line can be blamed for.
-    #[error("OBJ: {reason}")]
+    #[error("OBJ: {}", echo_message(reason))]
     Obj {
         /// What is wrong.
         reason: String,
     },
     /// `usemtl` names a material the material table does not map.
     #[error(
-        "OBJ line {line}: unknown material `{name}` (map it in the import settings' material table)"
+        "OBJ line {line}: unknown material `{}` (map it in the import settings' material table)",
+        echo(name)
     )]
     UnknownMaterial {
         /// The material name as written.
@@ -37,7 +40,7 @@ pub enum MapError {
         line: usize,
     },
     /// An STL file is malformed at a face (0-based).
-    #[error("STL face {face}: {reason}")]
+    #[error("STL face {face}: {}", echo_message(reason))]
     StlFace {
         /// 0-based face index.
         face: usize,
@@ -45,7 +48,7 @@ pub enum MapError {
         reason: String,
     },
     /// An STL file is malformed before its first face (header, size).
-    #[error("STL: {reason}")]
+    #[error("STL: {}", echo_message(reason))]
     Stl {
         /// What is wrong.
         reason: String,
@@ -59,7 +62,7 @@ pub enum MapError {
         limit: u64,
     },
     /// The input could not be read.
-    #[error("reading the input failed: {0}")]
+    #[error("reading the input failed: {}", echo_message(.0))]
     Io(String),
     /// A vertex is not finite or beyond [`crate::mesh::MAX_COORD`].
     #[error("vertex {index}: {value} is not finite or beyond +-{max} m")]
@@ -98,7 +101,7 @@ pub enum MapError {
         count: usize,
     },
     /// A parameter is out of its valid range.
-    #[error("invalid parameter `{field}` = {value}: {reason}")]
+    #[error("invalid parameter `{}` = {value}: {reason}", echo(field))]
     InvalidParameter {
         /// The parameter's name.
         field: String,
@@ -122,7 +125,7 @@ impl MapError {
 
 /// A [`MapError`] with the name of the file it came from: `` `file`: error ``.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("`{file}`: {error}")]
+#[error("`{}`: {error}", echo_file(file))]
 pub struct FileError {
     /// The file's name or path, as the caller gave it.
     pub file: String,

@@ -40,7 +40,11 @@ pub mod stats;
 #[derive(Debug, thiserror::Error)]
 pub enum PilsError {
     /// A setting out of range.
-    #[error("{field} = {value}: {reason}")]
+    #[error(
+        "{field} = {}: {}",
+        fathom_core::echo::echo(value),
+        fathom_core::echo::echo_message(reason)
+    )]
     Setting {
         /// The setting.
         field: String,

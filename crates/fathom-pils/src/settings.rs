@@ -131,6 +131,14 @@ impl PilsFile {
                 "must be in (0, timeout_s)",
             ));
         }
+        if l.signing_passphrase.as_deref() == Some("") {
+            // An empty passphrase would sign with a key anyone can derive.
+            return Err(PilsError::setting(
+                "link.signing_passphrase",
+                "\"\"",
+                "must not be empty (leave the key out for no signing)",
+            ));
+        }
         l.faults.check()?;
         Ok(Settings { file: self, method })
     }

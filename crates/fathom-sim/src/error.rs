@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use fathom_core::CoreError;
+use fathom_core::echo::{echo, echo_file, echo_list, echo_message, echo_path};
 
 /// Everything that can go wrong in `fathom-sim` and in the jobs it runs (the paper
 /// experiments of `fathom-experiments` and the replays of `fathom-replay` return it
@@ -16,7 +17,7 @@ use fathom_core::CoreError;
 #[derive(Debug, thiserror::Error)]
 pub enum SimError {
     /// Reading or writing a file or directory failed.
-    #[error("cannot {action} `{}`", path.display())]
+    #[error("cannot {action} `{}`", echo_path(path))]
     Io {
         /// What was attempted ("read", "write", "create directory", ...).
         action: &'static str,
@@ -45,7 +46,12 @@ pub enum SimError {
 
     /// A scenario value parsed fine but is not allowed
     /// (e.g. `noise.toml: key `noise.range_sigma`: must be > 0, got -0.1`).
-    #[error("{file}: key `{key_path}`: {reason}")]
+    #[error(
+        "{}: key `{}`: {}",
+        echo_file(file),
+        echo(key_path),
+        echo_message(reason)
+    )]
     Invalid {
         /// The file (or label) the value came from.
         file: String,
@@ -56,7 +62,7 @@ pub enum SimError {
     },
 
     /// A bad argument to a function of this crate (not tied to a scenario file).
-    #[error("invalid {what}: {reason}")]
+    #[error("invalid {}: {}", echo_message(what), echo_message(reason))]
     InvalidArgument {
         /// Which argument or input.
         what: String,
@@ -66,7 +72,8 @@ pub enum SimError {
 
     /// `--only NAME` names no registered experiment.
     #[error(
-        "unknown experiment `{name}`; known experiments: {}",
+        "unknown experiment `{}`; known experiments: {}",
+        echo(name),
         known_list(known)
     )]
     UnknownExperiment {
@@ -77,7 +84,7 @@ pub enum SimError {
     },
 
     /// Writing a CSV / Markdown output was refused (ragged columns, bad header, ...).
-    #[error("output `{}`: {reason}", path.display())]
+    #[error("output `{}`: {}", echo_path(path), echo_message(reason))]
     Output {
         /// The file that was to be written.
         path: PathBuf,
@@ -86,7 +93,7 @@ pub enum SimError {
     },
 
     /// JSON (de)serialization failed.
-    #[error("JSON `{}`", path.display())]
+    #[error("JSON `{}`", echo_path(path))]
     Json {
         /// The JSON file concerned.
         path: PathBuf,
@@ -210,9 +217,9 @@ fn toml_message(
     column: Option<usize>,
     message: &str,
 ) -> String {
-    let mut out = String::from(file);
+    let mut out = echo_file(file);
     if let Some(k) = key_path {
-        out.push_str(&format!(": key `{k}`"));
+        out.push_str(&format!(": key `{}`", echo(k)));
     }
     match (line, column) {
         (Some(l), Some(c)) => out.push_str(&format!(": line {l}, column {c}")),
@@ -220,7 +227,7 @@ fn toml_message(
         _ => {}
     }
     out.push_str(": ");
-    out.push_str(message.trim_end());
+    out.push_str(&echo_message(message).to_string());
     out
 }
 
@@ -228,6 +235,6 @@ fn known_list(known: &[String]) -> String {
     if known.is_empty() {
         "(none registered)".to_string()
     } else {
-        known.join(", ")
+        echo_list(known).to_string()
     }
 }

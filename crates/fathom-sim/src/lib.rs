@@ -67,3 +67,5 @@ pub mod user_run;
 pub use driver::{PaperOptions, PaperResult, error_chain, run_paper};
 pub use error::SimError;
 pub use experiment::{DynExperiment, Experiment};
+/// Bounded echoes of user input in messages (`fathom_core::echo`), for the front ends.
+pub use fathom_core::echo;

@@ -163,7 +163,28 @@ fn broken_merges_are_refused_with_one_line_and_nothing_written() {
     let first = r.lines().next().unwrap();
     let cut = &first[..first.len() / 2];
     std::fs::write(dir.join("c/records-0.jsonl"), r.replacen(first, cut, 1)).unwrap();
+    // A copy of shard 0 whose resolved scenario was edited after the run: its records
+    // were made with other settings.
+    std::fs::create_dir_all(dir.join("e")).unwrap();
+    for f in [
+        "manifest.json",
+        "records-0.jsonl",
+        "records-1.jsonl",
+        "records-2.jsonl",
+        "records-3.jsonl",
+    ] {
+        std::fs::copy(dir.join(&s[0]).join(f), dir.join("e").join(f)).unwrap();
+    }
+    let m = std::fs::read_to_string(dir.join("e/manifest.json")).unwrap();
+    assert!(m.contains("corr_gap_s = 1.0"), "{m}");
+    std::fs::write(
+        dir.join("e/manifest.json"),
+        m.replace("corr_gap_s = 1.0", "corr_gap_s = 2.0"),
+    )
+    .unwrap();
     for (args, needle) in [
+        (vec!["e", s[1].as_str()], "`scenario_sha256`"),
+        (vec!["e", s[1].as_str()], "shard `e`"),
         (vec![s[0].as_str()], "missing shard"),
         (
             vec![s[0].as_str(), s[1].as_str(), s[1].as_str()],
@@ -187,4 +208,60 @@ fn broken_merges_are_refused_with_one_line_and_nothing_written() {
         assert!(ran.stderr.contains(needle), "{all:?}: {}", ran.stderr);
         assert!(!dir.join("bad").exists(), "{all:?} left an output folder");
     }
+}
+
+/// The merge's output folder is never a shard folder, inside one or above one: its
+/// replacement would take the records with it.
+#[test]
+fn merge_out_apart_from_the_shards() {
+    let dir = scratch("campaign-out");
+    std::fs::write(dir.join("b.toml"), reduced_beacons()).unwrap();
+    let s = shards(&dir, "b.toml", "4", 2, "s");
+    let inside = format!("{}/merged", s[1]);
+    for (out, needle) in [
+        (s[0].as_str(), "is the shard folder"),
+        (inside.as_str(), "is inside the shard folder"),
+        (".", "holds the shard folder"),
+    ] {
+        let args = ["merge", &s[0], &s[1], "--out", out, "--force"];
+        let ran = fathom(&dir, &args);
+        assert_eq!(ran.code, 2, "{args:?}: {ran:?}");
+        assert_eq!(ran.stderr.trim().lines().count(), 1, "{}", ran.stderr);
+        assert!(ran.stderr.contains("--out"), "{args:?}: {}", ran.stderr);
+        assert!(ran.stderr.contains(needle), "{args:?}: {}", ran.stderr);
+        assert!(!dir.join(&inside).exists(), "{args:?}");
+        for shard in &s {
+            assert!(dir.join(shard).join("records-0.jsonl").exists(), "{args:?}");
+        }
+    }
+    // Negative control: beside the shards, the merge is written.
+    ok(&dir, &["merge", &s[0], &s[1], "--out", "merged"]);
+}
+
+/// `campaign slurm` refuses a run count its shards cannot run, naming `--runs`.
+#[test]
+fn slurm_campaign_refuses_run_counts_its_shards_cannot_run() {
+    let dir = scratch("campaign-slurm-runs");
+    std::fs::write(dir.join("b.toml"), reduced_beacons()).unwrap();
+    // Fewer runs than shards; one run, which the experiment refuses (no interval).
+    for (shards, needle) in [
+        ("2", "--runs 1 is fewer than --shards 2"),
+        ("1", "--runs: needs at least 2"),
+    ] {
+        let args = [
+            "campaign", "slurm", "b.toml", "--runs", "1", "--shards", shards, "--dir", "c",
+        ];
+        let ran = fathom(&dir, &args);
+        assert_eq!(ran.code, 2, "{ran:?}");
+        assert_eq!(ran.stderr.trim().lines().count(), 1, "{}", ran.stderr);
+        assert!(ran.stderr.contains(needle), "{}", ran.stderr);
+        assert!(!dir.join("c").exists());
+    }
+    ok(
+        &dir,
+        &[
+            "campaign", "slurm", "b.toml", "--runs", "2", "--shards", "2", "--dir", "c",
+        ],
+    );
+    assert!(dir.join("c/campaign.sh").exists());
 }

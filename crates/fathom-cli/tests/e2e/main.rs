@@ -7,6 +7,7 @@
 mod support;
 
 mod beacons;
+mod bounded_errors;
 mod campaign;
 mod cli;
 mod default_outputs;

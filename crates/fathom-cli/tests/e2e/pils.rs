@@ -429,6 +429,61 @@ fn bad_settings_and_foreign_output_folder_are_refused_before_the_run() {
     );
 }
 
+/// A `--nav` address nobody can be at, an empty signing passphrase and an `--out`
+/// that cannot be made are refused with exit 2 naming the flag or key, before any
+/// socket and before the run.
+#[test]
+fn bad_flags_and_empty_passphrase_are_refused_before_the_run() {
+    let dir = scratch("pils-flags");
+    std::fs::write(dir.join("pils.toml"), settings("")).unwrap();
+    for nav in ["127.0.0.1:0", "0.0.0.0:14550"] {
+        let r = fathom(
+            &dir,
+            &["pils", "sim", "pils.toml", "--nav", nav, "--out", "o"],
+        );
+        assert_eq!(r.code, 2, "{nav}: {}", r.stderr);
+        assert_eq!(r.stderr.trim().lines().count(), 1, "{}", r.stderr);
+        assert!(r.stderr.contains(&format!("--nav {nav}")), "{}", r.stderr);
+        assert!(!dir.join("o").exists());
+    }
+    std::fs::write(
+        dir.join("empty-key.toml"),
+        settings("signing_passphrase = \"\"\n"),
+    )
+    .unwrap();
+    for args in [
+        &["check", "empty-key.toml"][..],
+        &["pils", "empty-key.toml", "--out", "o"][..],
+    ] {
+        let r = fathom(&dir, args);
+        assert_eq!(r.code, 2, "{args:?}: {}", r.stderr);
+        assert!(
+            r.stderr.contains("link.signing_passphrase"),
+            "{args:?}: {}",
+            r.stderr
+        );
+        assert!(!dir.join("o").exists());
+    }
+    // `--out` under a regular file: refused before the offline run, which takes longer.
+    std::fs::write(dir.join("file"), "").unwrap();
+    let start = Instant::now();
+    let r = fathom(
+        &dir,
+        &["pils", "offline", "pils.toml", "--out", "file/offline"],
+    );
+    let refused_in = start.elapsed();
+    assert_eq!(r.code, 2, "{}", r.stderr);
+    assert!(r.stderr.contains("--out"), "{}", r.stderr);
+    let start = Instant::now();
+    let r = fathom(&dir, &["pils", "offline", "pils.toml", "--out", "offline"]);
+    assert_eq!(r.code, 0, "{}", r.stderr);
+    assert!(
+        refused_in < start.elapsed() / 2,
+        "refused in {refused_in:?}, the run takes {:?}",
+        start.elapsed()
+    );
+}
+
 /// The acceptance run itself: the full `buildings` MGPMF flight of
 /// `scenarios/pils.toml` (four legs, 17,446 steps, 174 s simulated) in lockstep as two
 /// processes equals the offline run fed the same MAVLink-quantized measurements, bit

@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use fathom_core::echo::{echo, echo_list, echo_message, echo_path};
+
 /// Where in a CSV file an error sits: the 1-based line and, when one cell is at fault,
 /// the 1-based column and its header name.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -17,7 +19,7 @@ impl std::fmt::Display for Cell {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(f, "line {}", self.line)?;
         if let Some((c, name)) = &self.column {
-            write!(f, ", column {c} (`{name}`)")?;
+            write!(f, ", column {c} (`{}`)", echo(name))?;
         }
         Ok(())
     }
@@ -28,13 +30,13 @@ impl std::fmt::Display for Cell {
 #[derive(Debug, thiserror::Error)]
 pub enum LogError {
     /// The folder does not exist or is not a directory.
-    #[error("log folder `{}` does not exist or is not a directory", dir.display())]
+    #[error("log folder `{}` does not exist or is not a directory", echo_path(dir))]
     NoFolder {
         /// The folder.
         dir: PathBuf,
     },
     /// A file the log needs is absent.
-    #[error("`{}`: missing: {why}", path.display())]
+    #[error("`{}`: missing: {}", echo_path(path), echo_message(why))]
     MissingFile {
         /// The file expected.
         path: PathBuf,
@@ -42,7 +44,7 @@ pub enum LogError {
         why: String,
     },
     /// Reading failed.
-    #[error("cannot read `{}`", path.display())]
+    #[error("cannot read `{}`", echo_path(path))]
     Io {
         /// The file.
         path: PathBuf,
@@ -51,7 +53,7 @@ pub enum LogError {
         source: std::io::Error,
     },
     /// `log.toml` is not a valid manifest.
-    #[error("`{}`: {reason}", path.display())]
+    #[error("`{}`: {}", echo_path(path), echo_message(reason))]
     Manifest {
         /// The manifest file.
         path: PathBuf,
@@ -59,7 +61,7 @@ pub enum LogError {
         reason: String,
     },
     /// The header names a column the file does not have, or misses one it needs.
-    #[error("`{}` {at}: {reason}", path.display())]
+    #[error("`{}` {at}: {}", echo_path(path), echo_message(reason))]
     Header {
         /// The file.
         path: PathBuf,
@@ -69,7 +71,11 @@ pub enum LogError {
         reason: String,
     },
     /// A column's unit is not one the layout accepts for it.
-    #[error("`{}` {at}: unit `{unit}` is not {what}; use one of: {accepted}", path.display())]
+    #[error(
+        "`{}` {at}: unit `{}` is not {what}; use one of: {accepted}",
+        echo_path(path),
+        echo(unit)
+    )]
     Unit {
         /// The file.
         path: PathBuf,
@@ -83,7 +89,7 @@ pub enum LogError {
         accepted: Box<str>,
     },
     /// A row cannot be split into the header's fields (count, quoting, encoding).
-    #[error("`{}` line {line}: {reason}", path.display())]
+    #[error("`{}` line {line}: {}", echo_path(path), echo_message(reason))]
     Syntax {
         /// The file.
         path: PathBuf,
@@ -94,7 +100,7 @@ pub enum LogError {
     },
     /// A cell is not an acceptable value (not a number, NaN, infinite, out of range,
     /// not a whole number, ...).
-    #[error("`{}` {at}: {reason}", path.display())]
+    #[error("`{}` {at}: {}", echo_path(path), echo_message(reason))]
     Value {
         /// The file.
         path: PathBuf,
@@ -106,7 +112,7 @@ pub enum LogError {
     /// Time does not increase as the file requires.
     #[error(
         "`{}` {at}: time {time} s is {} the previous row's {previous} s (times must {})",
-        path.display(),
+        echo_path(path),
         if *strict { "not after" } else { "before" },
         if *strict { "increase strictly" } else { "not decrease" }
     )]
@@ -125,8 +131,8 @@ pub enum LogError {
     /// A range names a beacon the beacon table does not list.
     #[error(
         "`{}` {at}: unknown beacon id {id} (`beacons.csv` lists {})",
-        path.display(),
-        known.iter().map(i64::to_string).collect::<Vec<_>>().join(", ")
+        echo_path(path),
+        echo_list(known)
     )]
     UnknownBeacon {
         /// The range file.
@@ -140,7 +146,7 @@ pub enum LogError {
     },
     /// The files of the folder do not fit together (e.g. two motion sources, a file
     /// the log's motion model cannot use, a row count the file must not have).
-    #[error("`{}`: {reason}", path.display())]
+    #[error("`{}`: {}", echo_path(path), echo_message(reason))]
     Inconsistent {
         /// The file (or folder) concerned.
         path: PathBuf,

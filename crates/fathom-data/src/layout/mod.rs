@@ -33,6 +33,10 @@ pub use units::Quantity;
 
 /// The manifest's file name.
 pub const MANIFEST: &str = "log.toml";
+
+/// The largest data file read (a log's, the Plaza files), bytes (1 GiB): a device or
+/// a runaway file is refused instead of filling the memory.
+pub const MAX_FILE_BYTES: u64 = 1 << 30;
 /// The `format` value of a manifest.
 pub const FORMAT: &str = "fathom-log";
 /// The layout version this fathom reads and writes.
@@ -120,8 +124,8 @@ impl Manifest {
         })?;
         if m.format != FORMAT {
             return Err(bad(format!(
-                "key `format`: must be \"{FORMAT}\", got {:?}",
-                m.format
+                "key `format`: must be \"{FORMAT}\", got \"{}\"",
+                fathom_core::echo::echo(&m.format)
             )));
         }
         if m.version != VERSION {
@@ -168,7 +172,7 @@ impl FileSet {
             });
         }
         let manifest_path = dir.join(MANIFEST);
-        if !manifest_path.is_file() {
+        if !manifest_path.exists() {
             return Err(LogError::MissingFile {
                 path: manifest_path,
                 why: "every log folder starts with `log.toml` (format = \"fathom-log\", version = 1, \
@@ -176,16 +180,11 @@ impl FileSet {
                     .into(),
             });
         }
-        let read = |path: &Path| {
-            std::fs::read(path).map_err(|source| LogError::Io {
-                path: path.to_path_buf(),
-                source,
-            })
-        };
-        let text = String::from_utf8(read(&manifest_path)?).map_err(|_| LogError::Manifest {
-            path: manifest_path.clone(),
-            reason: "not valid UTF-8 text".into(),
-        })?;
+        let text =
+            String::from_utf8(read_log_file(&manifest_path)?).map_err(|_| LogError::Manifest {
+                path: manifest_path.clone(),
+                reason: "not valid UTF-8 text".into(),
+            })?;
         let manifest = Manifest::parse(&text, &manifest_path)?;
         let known = manifest.kind.files();
         let mut names: Vec<String> = std::fs::read_dir(dir)
@@ -211,8 +210,9 @@ impl FileSet {
         let mut files = BTreeMap::new();
         for name in known {
             let path = dir.join(name);
-            if path.is_file() {
-                files.insert(name, read(&path)?);
+            // Anything of that name is read: a FIFO or a device is refused, not skipped.
+            if path.exists() {
+                files.insert(name, read_log_file(&path)?);
             }
         }
         Ok(Self {
@@ -271,6 +271,48 @@ impl FileSet {
             why: format!("{why}; its header: {}", expected_header(spec)),
         })
     }
+}
+
+/// Reads one file of a log folder as [`read_regular_file`] does.
+///
+/// # Errors
+/// [`LogError::Io`] naming the file: unreadable, not a regular file, too large.
+pub fn read_log_file(path: &Path) -> Result<Vec<u8>, LogError> {
+    read_regular_file(path).map_err(|source| LogError::Io {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// Reads a regular file of at most [`MAX_FILE_BYTES`]; the type is checked before the
+/// file is opened, so that a FIFO cannot block the reader and a device is not read.
+///
+/// # Errors
+/// The I/O error, or one of kind `InvalidInput` saying that the file is not a
+/// regular file or is too large.
+pub fn read_regular_file(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::{Error, ErrorKind, Read};
+    let too_large = |bytes: u64| {
+        Error::new(
+            ErrorKind::InvalidInput,
+            format!("{bytes} bytes or more, above the limit of {MAX_FILE_BYTES} bytes"),
+        )
+    };
+    let meta = std::fs::metadata(path)?;
+    if !meta.is_file() {
+        return Err(Error::new(ErrorKind::InvalidInput, "not a regular file"));
+    }
+    if meta.len() > MAX_FILE_BYTES {
+        return Err(too_large(meta.len()));
+    }
+    let mut bytes = Vec::new();
+    std::fs::File::open(path)?
+        .take(MAX_FILE_BYTES + 1)
+        .read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > MAX_FILE_BYTES {
+        return Err(too_large(bytes.len() as u64));
+    }
+    Ok(bytes)
 }
 
 /// Checks that `table` has exactly one row (`initial.csv`).

@@ -10,6 +10,8 @@
 
 use std::path::Path;
 
+use fathom_core::echo::echo;
+
 use super::error::{Cell, LogError};
 use super::units::{Quantity, Unit};
 
@@ -210,7 +212,8 @@ fn split_header(cell: &str) -> Result<(&str, Option<&str>), String> {
         Some(open) => {
             let Some(unit) = cell[open + 1..].strip_suffix(']') else {
                 return Err(format!(
-                    "header `{cell}`: a unit is written in brackets at the end, as `range[m]`"
+                    "header `{}`: a unit is written in brackets at the end, as `range[m]`",
+                    echo(cell)
                 ));
             };
             Ok((cell[..open].trim(), Some(unit.trim())))
@@ -424,14 +427,15 @@ fn read_header(
             return Err(err(
                 here,
                 format!(
-                    "unknown column `{name}`; `{}` has the columns {}",
+                    "unknown column `{}`; `{}` has the columns {}",
+                    echo(name),
                     spec.file,
                     expected_header(spec)
                 ),
             ));
         };
         if present[i].is_some() {
-            return Err(err(here, format!("column `{name}` appears twice")));
+            return Err(err(here, format!("column `{}` appears twice", echo(name))));
         }
         let c = &spec.columns[i];
         let unit = match (c.quantity.has_unit(), unit) {
@@ -440,7 +444,8 @@ fn read_header(
                 return Err(err(
                     here,
                     format!(
-                        "column `{name}` is a number without unit; write `{name}`, not `{name}[{u}]`"
+                        "column `{name}` is a number without unit; write `{name}`, not `{name}[{}]`",
+                        echo(u)
                     ),
                 ));
             }
@@ -538,9 +543,9 @@ fn parse_value(raw: &[u8], c: &ColumnSpec, unit: &Unit) -> Result<f64, String> {
     }
     let v: f64 = text
         .parse()
-        .map_err(|_| format!("`{text}` is not a number"))?;
+        .map_err(|_| format!("`{}` is not a number", echo(text)))?;
     if !v.is_finite() {
-        return Err(format!("`{text}` is not a finite number"));
+        return Err(format!("`{}` is not a finite number", echo(text)));
     }
     let si = unit.to_si(v);
     let bound = c.quantity.bound();

@@ -1,5 +1,6 @@
 //! The `beacons` scenario file: schema and check.
 
+use fathom_core::echo::echo;
 use fathom_estimators::schemes::UpdateScheme;
 use fathom_sensors::{
     BeaconSuiteConfig, BeaconSuiteParams, NoiseSwitches, Timing, noise::OutlierParams,
@@ -301,8 +302,8 @@ impl BeaconsScenario {
                     file,
                     format!("{key}.name"),
                     format!(
-                        "must be a non-empty, unique name of [A-Za-z0-9_-], got {:?}",
-                        g.name
+                        "must be a non-empty, unique name of [A-Za-z0-9_-], got \"{}\"",
+                        echo(&g.name)
                     ),
                 )
             })?;

@@ -1,5 +1,6 @@
 //! The `fusion` scenario file: schema, check, and the checked setup.
 
+use fathom_core::echo::echo;
 use fathom_core::units::{deg_to_rad, knots_to_mps};
 use fathom_sensors::integrated::{DvlDrParams, InsParams};
 use fathom_traj::{
@@ -399,7 +400,10 @@ impl FusionScenario {
                 return Err(SimError::invalid(
                     file,
                     "filters.reading",
-                    format!("must be \"bar_shalom\" or \"as_printed\", got {other:?}"),
+                    format!(
+                        "must be \"bar_shalom\" or \"as_printed\", got \"{}\"",
+                        echo(other)
+                    ),
                 ));
             }
         };

@@ -1,6 +1,7 @@
 //! The `urban` scenario checked into the library crates' types ([`Checked`]); fast
 //! and free of I/O (a world file is read by [`super::world`] when preparing).
 
+use fathom_core::echo::echo;
 use fathom_core::units::{
     deg_per_sqrt_hour_to_rad_per_sqrt_s, deg_to_rad, milli_g_to_mps2, per_sqrt_hour_to_per_sqrt_s,
 };
@@ -217,7 +218,7 @@ fn target(
             SimError::invalid(
                 file,
                 format!("{key}.scenario"),
-                format!("no [[scenarios]] entry is named {scenario:?}"),
+                format!("no [[scenarios]] entry is named \"{}\"", echo(scenario)),
             )
         })?;
     let method = Method::from_name(method).ok_or_else(|| {
@@ -225,7 +226,8 @@ fn target(
             file,
             format!("{key}.method"),
             format!(
-                "unknown method {method:?}, expected one of {}",
+                "unknown method \"{}\", expected one of {}",
+                echo(method),
                 Method::ALL.map(|m| format!("{:?}", m.name())).join(", ")
             ),
         )
@@ -373,7 +375,10 @@ impl UrbanScenario {
                 return Err(SimError::invalid(
                     file,
                     "range_effects",
-                    format!("must be \"none\" or \"glass_incidence\", got {other:?}"),
+                    format!(
+                        "must be \"none\" or \"glass_incidence\", got \"{}\"",
+                        echo(other)
+                    ),
                 ));
             }
         };
@@ -527,7 +532,10 @@ impl UrbanScenario {
                 return Err(SimError::invalid(
                     file,
                     "mgpmf.posterior",
-                    format!("must be \"interpolated\" or \"information\", got {other:?}"),
+                    format!(
+                        "must be \"interpolated\" or \"information\", got \"{}\"",
+                        echo(other)
+                    ),
                 ));
             }
         };
@@ -548,7 +556,10 @@ impl UrbanScenario {
                 return Err(SimError::invalid(
                     file,
                     "particle.kernel",
-                    format!("must be \"roughening\" or \"regularized\", got {other:?}"),
+                    format!(
+                        "must be \"roughening\" or \"regularized\", got \"{}\"",
+                        echo(other)
+                    ),
                 ));
             }
         };

@@ -6,6 +6,7 @@ use super::scenario::PresetWorld;
 use super::scenario::Ranging;
 use super::scenario::SceneToml;
 use crate::common::check_case_name;
+use fathom_core::echo::echo;
 use fathom_map::AxisConvention;
 use fathom_map::ImportSettings;
 use fathom_map::presets::Bridge;
@@ -72,8 +73,8 @@ pub(super) fn scene(
             file,
             key("name"),
             format!(
-                "must be a non-empty, unique name of [A-Za-z0-9_-], got {:?}",
-                s.name
+                "must be a non-empty, unique name of [A-Za-z0-9_-], got \"{}\"",
+                echo(&s.name)
             ),
         )
     })?;

@@ -10,7 +10,8 @@
 use std::path::Path as FsPath;
 
 use fathom_core::RayCaster;
-use fathom_map::{BvhCaster, TriMesh, obj::parse_obj, stl::parse_stl};
+use fathom_core::echo::{echo_file, echo_path};
+use fathom_map::{BvhCaster, TriMesh, obj::read_obj, stl::read_stl};
 use fathom_sensors::gnss::{GnssParams, GnssReceiver};
 use fathom_traj::quadrotor::{Path, PathParams, Waypoint};
 use nalgebra::Vector3;
@@ -141,21 +142,38 @@ fn read_world(
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    let bytes =
-        std::fs::read(&full).map_err(|e| bad(format!("cannot read `{}`: {e}", full.display())))?;
+    let shown = echo_file(path);
+    // Only a regular file is opened: opening a FIFO would block, a device would be
+    // read to the import limit.
+    let meta = std::fs::metadata(&full)
+        .map_err(|e| bad(format!("cannot read `{}`: {e}", echo_path(&full))))?;
+    if !meta.is_file() {
+        return Err(bad(format!("`{shown}` is not a regular file")));
+    }
+    if meta.len() > settings.max_bytes {
+        return Err(bad(format!(
+            "`{shown}`: {}",
+            fathom_map::MapError::TooLarge {
+                bytes: meta.len(),
+                limit: settings.max_bytes
+            }
+        )));
+    }
+    let file = std::fs::File::open(&full)
+        .map_err(|e| bad(format!("cannot read `{}`: {e}", echo_path(&full))))?;
     let parsed = match ext.as_str() {
-        "obj" => parse_obj(&bytes, settings),
-        "stl" => parse_stl(&bytes, settings),
+        "obj" => read_obj(file, settings),
+        "stl" => read_stl(file, settings),
         _ => {
             return Err(bad(format!(
-                "`{path}`: the world file must end in .obj or .stl"
+                "`{shown}`: the world file must end in .obj or .stl"
             )));
         }
     };
     let (mesh, report) = parsed.map_err(|e| bad(e.in_file(path).to_string()))?;
     if mesh.is_empty() {
         return Err(bad(format!(
-            "`{path}` has no faces ({} read, {} degenerate or duplicate): a world needs triangles",
+            "`{shown}` has no faces ({} read, {} degenerate or duplicate): a world needs triangles",
             report.faces_read,
             report.mesh.degenerate_skipped + report.mesh.duplicate_skipped
         )));
@@ -223,7 +241,7 @@ fn prepare_scene(
     let (waypoints, file_name) = match (&spec.waypoints, &spec.world) {
         (Some(w), WorldSource::File { path, settings }) => (
             w.iter().map(|p| settings.to_ned(p)).collect::<Vec<_>>(),
-            format!("`{path}`"),
+            format!("`{}`", echo_file(path)),
         ),
         (Some(w), _) => (
             w.iter().map(|p| Vector3::new(p[0], p[1], p[2])).collect(),

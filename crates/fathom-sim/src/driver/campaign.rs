@@ -24,6 +24,7 @@ use crate::SimError;
 use crate::experiment::{
     Assessed, Batch, DynExperiment, FoundRecord, Job, RecordSink, RecordSource, Shard,
 };
+use fathom_core::echo::{echo, echo_path};
 use fathom_report::output::write_text;
 
 /// Version of the shard folder layout (2: the manifest holds the scenario as given).
@@ -242,13 +243,26 @@ fn check_manifests(shards: &[(PathBuf, Manifest)]) -> Result<Vec<Vec<PathBuf>>, 
         ));
     };
     let bad = |dir: &Path, what: String| {
-        SimError::invalid_argument(format!("shard `{}`", dir.display()), what)
+        SimError::invalid_argument(format!("shard `{}`", echo_path(dir)), what)
     };
     for (dir, m) in shards {
         if m.format != FORMAT {
             return Err(bad(
                 dir,
                 format!("layout version {}, expected {FORMAT}", m.format),
+            ));
+        }
+        // The records were made with the scenario the hash was taken of: an edited
+        // `resolved_scenario` would analyse them under other settings.
+        let actual = sha256_hex(&m.resolved_scenario);
+        if actual != m.scenario_sha256 {
+            return Err(bad(
+                dir,
+                format!(
+                    "manifest.json: `scenario_sha256` {} is not the SHA-256 of its \
+                     `resolved_scenario` ({actual}): the manifest was edited after the run",
+                    echo(&m.scenario_sha256)
+                ),
             ));
         }
         for (field, a, b) in [
@@ -260,8 +274,10 @@ fn check_manifests(shards: &[(PathBuf, Manifest)]) -> Result<Vec<Vec<PathBuf>>, 
                 return Err(bad(
                     dir,
                     format!(
-                        "{field} `{a}` differs from `{b}` of `{}`",
-                        first_dir.display()
+                        "{field} `{}` differs from `{}` of `{}`",
+                        echo(a),
+                        echo(b),
+                        echo_path(first_dir)
                     ),
                 ));
             }
@@ -323,6 +339,51 @@ fn check_manifests(shards: &[(PathBuf, Manifest)]) -> Result<Vec<Vec<PathBuf>>, 
         order.push(dirs);
     }
     Ok(order)
+}
+
+/// `path` made absolute and with its symbolic links resolved as far as it exists
+/// (an output folder may not exist yet).
+fn resolved_path(path: &Path) -> PathBuf {
+    let absolute = std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf());
+    let mut existing = absolute.as_path();
+    let mut rest = Vec::new();
+    while let Some(parent) = existing.parent() {
+        if let Ok(real) = existing.canonicalize() {
+            return rest.iter().rev().fold(real, |p, name| p.join(name));
+        }
+        if let Some(name) = existing.file_name() {
+            rest.push(name.to_owned());
+        }
+        existing = parent;
+    }
+    absolute
+}
+
+/// Refuses an output folder that is a shard folder, lies inside one or holds one: the
+/// merge's output folder is replaced, and with it the shard's records.
+fn check_out_apart(dirs: &[PathBuf], out_dir: &Path) -> Result<(), SimError> {
+    let out = resolved_path(out_dir);
+    for dir in dirs {
+        let shard = resolved_path(dir);
+        if out.starts_with(&shard) || shard.starts_with(&out) {
+            return Err(SimError::invalid_argument(
+                "--out",
+                format!(
+                    "`{}` {} the shard folder `{}`; write the merge elsewhere",
+                    echo_path(out_dir),
+                    if out == shard {
+                        "is"
+                    } else if out.starts_with(&shard) {
+                        "is inside"
+                    } else {
+                        "holds"
+                    },
+                    echo_path(dir)
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Reads the record files of each batch from its shards, in run order.
@@ -403,6 +464,7 @@ pub fn merge(
     for d in dirs {
         shards.push((d.clone(), read_manifest(d)?));
     }
+    check_out_apart(dirs, out_dir)?;
     let order = check_manifests(&shards)?;
     let first = shards[0].1.clone();
     let exp = registry
