@@ -67,11 +67,7 @@ pub(crate) fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Fail
         progress: Some(run_hook(bar.clone())),
         env: Environment {
             limits: args.limits.limits()?,
-            ..Environment::new(
-                std::env::current_dir()
-                    .context("cannot read the current directory")
-                    .map_err(Failure::Run)?,
-            )
+            ..Environment::new(crate::current_dir()?)
         },
     };
     let (exp, assessed) = assess_scenario(&job, &registry).map_err(failure)?;
@@ -106,9 +102,7 @@ pub(crate) fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Fail
 }
 
 pub(crate) fn merge_cmd(args: &MergeArgs) -> Result<String, Failure> {
-    let base_dir = std::env::current_dir()
-        .context("cannot read the current directory")
-        .map_err(Failure::Run)?;
+    let base_dir = crate::current_dir()?;
     let out = match &args.out {
         Some(out) => out.clone(),
         None => {
@@ -169,11 +163,7 @@ pub(crate) fn campaign_cmd(kind: &CampaignKind) -> Result<String, Failure> {
         seed: None,
         threads: None,
         progress: None,
-        env: Environment::new(
-            std::env::current_dir()
-                .context("cannot read the current directory")
-                .map_err(Failure::Run)?,
-        ),
+        env: Environment::new(crate::current_dir()?),
     };
     if let Err(e) = assess_scenario(&job, &registry()) {
         let line = one_line(&error_chain(&e));

@@ -274,9 +274,7 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         runs: args.runs,
         threads: args.threads,
         seed: args.seed,
-        base_dir: std::env::current_dir()
-            .context("cannot read the current directory")
-            .map_err(Failure::Run)?,
+        base_dir: crate::current_dir()?,
         force: args.force,
         limits,
     };
@@ -318,6 +316,14 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
 
 /// Where every command writes by default: `fathom-out/<name>` in the current directory.
 pub(crate) const OUT_ROOT: &str = "fathom-out";
+
+/// The current directory (relative settings paths and data folders are found from
+/// it).
+pub(crate) fn current_dir() -> Result<PathBuf, Failure> {
+    std::env::current_dir()
+        .context("cannot read the current directory")
+        .map_err(Failure::Run)
+}
 
 /// The default output folder `fathom-out/<name>` of a command.
 pub(crate) fn default_out(name: &str) -> PathBuf {

@@ -197,11 +197,7 @@ fn replay(r: &Request<'_>) -> Result<String, Failure> {
         seed: None,
         threads: None,
         progress: None,
-        env: Environment::new(
-            std::env::current_dir()
-                .context("cannot read the current directory")
-                .map_err(Failure::Run)?,
-        ),
+        env: Environment::new(crate::current_dir()?),
     };
     let options = WriteOptions {
         force: r.force,

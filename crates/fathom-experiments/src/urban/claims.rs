@@ -195,7 +195,9 @@ pub fn claims(rows: &[Row], tolerance: f64) -> Vec<Claim> {
         .iter()
         .filter(|r| r.metric == "diff_rmse_3d_open")
         .filter_map(|r| {
-            let scene = r.method.strip_suffix("/GPS/INS-vs-INS-only")?;
+            let scene = r
+                .method
+                .strip_suffix(&diff_row("", Method::GpsIns, Method::InsOnly))?;
             Some((scene, r))
         })
         .collect();

@@ -8,7 +8,7 @@ use fathom_estimators::map_aided::PAPER_FINDINGS;
 use fathom_traj::quadrotor::{EQ21_EQ22_FINDINGS, eq22_discrepancies};
 
 use super::analysis::{BEYOND_M, metric_index, values};
-use super::claims::{claims, method_row};
+use super::claims::{claims, diff_row, method_row};
 use super::nav::Method;
 use super::record::KeptRun;
 use super::world::Prepared;
@@ -336,7 +336,7 @@ fn switching_text(c: &super::check::Checked, rows: &[Row]) -> String {
         ));
         let open_diff = find(
             rows,
-            &format!("{n}/GPS/INS-vs-INS-only"),
+            &diff_row(n, Method::GpsIns, Method::InsOnly),
             "diff_rmse_3d_open",
         );
         match find(rows, &method_row(n, Method::GpsIns), "rmse_3d_open") {
