@@ -8,9 +8,8 @@ use std::time::Instant;
 use anyhow::{Context, anyhow};
 use clap::{Args, Subcommand};
 use fathom_pils::report::SimReport;
-use fathom_pils::scenario::Method;
 use fathom_pils::session::Session;
-use fathom_pils::settings::{Pacing, PilsFile, Settings};
+use fathom_pils::settings::{Pacing, Settings};
 
 use crate::Failure;
 use crate::pils_session::{both, claim, commit, prepare, run_err, write_files};
@@ -21,17 +20,31 @@ use crate::pils_session::{both, claim, commit, prepare, run_err, write_files};
 pub struct PilsArgs {
     #[command(subcommand)]
     side: Option<PilsSide>,
-    /// Settings file (`experiment = "pils"`): both processes on loopback.
+    /// An `urban` scenario file, or PILS settings (`experiment = "pils"`) naming
+    /// one: both processes on loopback.
     scenario: Option<PathBuf>,
     /// Output folder.
     #[arg(long, value_name = "DIR", default_value = "fathom-out/pils")]
     out: PathBuf,
-    /// The navigation method (overrides the file's).
-    #[arg(long, value_name = "NAME")]
-    method: Option<String>,
+    #[command(flatten)]
+    pick: Pick,
     /// Write into `--out` even if it holds files fathom did not write (they are kept).
     #[arg(long)]
     force: bool,
+}
+
+/// What is flown, overriding the file's choice.
+#[derive(Debug, Clone, Default, Args)]
+pub(crate) struct Pick {
+    /// The scene flown (a `[[scenarios]]` name of the `urban` scenario).
+    #[arg(long, value_name = "NAME")]
+    pub(crate) scene: Option<String>,
+    /// The navigation method (one of the scenario's `methods`).
+    #[arg(long, value_name = "NAME")]
+    pub(crate) method: Option<String>,
+    /// The run index (run `N` of `fathom run`: its flight, noise and initial error).
+    #[arg(long, value_name = "N")]
+    pub(crate) run: Option<u64>,
 }
 
 #[derive(Debug, Subcommand)]
@@ -47,6 +60,8 @@ enum PilsSide {
         /// Own address.
         #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:0")]
         bind: SocketAddr,
+        #[command(flatten)]
+        pick: Pick,
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "fathom-out/pils-sim")]
         out: PathBuf,
@@ -64,9 +79,8 @@ enum PilsSide {
         /// Accept only this simulator address (default: the first valid sender).
         #[arg(long, value_name = "ADDR")]
         sim: Option<SocketAddr>,
-        /// The method (overrides the file's).
-        #[arg(long, value_name = "NAME")]
-        method: Option<String>,
+        #[command(flatten)]
+        pick: Pick,
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "fathom-out/pils-nav")]
         out: PathBuf,
@@ -81,9 +95,8 @@ enum PilsSide {
         /// With the MAVLink quantization of every message (what lockstep PILS sees).
         #[arg(long)]
         quantized: bool,
-        /// The method (overrides the file's).
-        #[arg(long, value_name = "NAME")]
-        method: Option<String>,
+        #[command(flatten)]
+        pick: Pick,
         /// Output folder: the solutions go into its `solutions.csv`.
         #[arg(long, value_name = "DIR", default_value = "fathom-out/pils-offline")]
         out: PathBuf,
@@ -97,9 +110,8 @@ enum PilsSide {
         /// Runs (run indices `run`, `run + 1`, ...; at least 2).
         #[arg(long, value_name = "N", default_value_t = 10)]
         runs: usize,
-        /// The method (overrides the file's).
-        #[arg(long, value_name = "NAME")]
-        method: Option<String>,
+        #[command(flatten)]
+        pick: Pick,
         /// Output folder.
         #[arg(long, value_name = "DIR", default_value = "fathom-out/pils-compare")]
         out: PathBuf,
@@ -109,19 +121,17 @@ enum PilsSide {
     },
 }
 
-fn load(path: &Path, method: Option<&str>) -> Result<Settings, Failure> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("reading {}", path.display()))
-        .map_err(Failure::Usage)?;
+fn load(path: &Path, pick: &Pick) -> Result<Settings, Failure> {
     let mut s =
-        PilsFile::parse(&text).map_err(|e| Failure::Usage(anyhow!("{}: {e}", path.display())))?;
-    if let Some(m) = method {
-        s.method = Method::from_name(m).ok_or_else(|| {
-            Failure::Usage(anyhow!(
-                "--method {m}: must be INS-only, GPS/INS, GREKF or MGPMF"
-            ))
-        })?;
-        s.file.method = s.method.name().into();
+        Settings::load(path).map_err(|e| Failure::Usage(anyhow!("{}: {e}", path.display())))?;
+    if pick.scene.is_some() {
+        s.file.scene.clone_from(&pick.scene);
+    }
+    if pick.method.is_some() {
+        s.file.method.clone_from(&pick.method);
+    }
+    if let Some(r) = pick.run {
+        s.file.run = r;
     }
     Ok(s)
 }
@@ -132,12 +142,15 @@ pub(crate) const EXPERIMENT: &str = "pils";
 /// `fathom check` of PILS settings: parsed, checked, the world built and the run
 /// flown, as `fathom pils` does before touching a socket (exit 2 on any error).
 pub(crate) fn check(path: &Path, quiet: bool) -> Result<String, Failure> {
-    let s = load(path, None)?;
-    prepare(&s, path)?;
+    let s = load(path, &Pick::default())?;
+    let p = prepare(&s, path)?;
     let line = format!(
-        "OK {}: PILS settings, method {}, {} pacing; the world built and the run flown",
+        "OK {}: PILS settings, {}/{} run {} of {}, {} pacing; the world built and the run flown",
         path.display(),
-        s.method.name(),
+        p.flight.scene_name(),
+        p.flight.method.name(),
+        p.flight.run,
+        s.scenario_path.display(),
         match s.file.link.pacing {
             Pacing::Lockstep => "lockstep",
             Pacing::Realtime => "realtime",
@@ -175,6 +188,7 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
             scenario,
             nav,
             bind,
+            pick,
             out,
             force,
         }) => {
@@ -183,7 +197,7 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
                     "--nav {nav}: the navigation's address needs a host and a port (e.g. 127.0.0.1:14550)"
                 )));
             }
-            let s = load(scenario, None)?;
+            let s = load(scenario, pick)?;
             let p = prepare(&s, scenario)?;
             let dir = claim(out, *force)?;
             let mut link = fathom_pils::session::bind_sim(&s, *bind, *nav).map_err(run_err)?;
@@ -199,20 +213,20 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
             scenario,
             listen,
             sim,
-            method,
+            pick,
             out,
             force,
         }) => {
-            let s = load(scenario, method.as_deref())?;
+            let s = load(scenario, pick)?;
             // The navigation's own world (fails on the settings the simulator checks).
-            fathom_pils::scenario::Shared::new(s.file.flight.clone())
+            let fl = fathom_pils::session::flight_of(&s)
                 .map_err(|e| Failure::Usage(anyhow!("{}: {e}", scenario.display())))?;
             let dir = claim(out, *force)?;
             let mut link = fathom_pils::session::bind_nav(&s, *listen, *sim).map_err(run_err)?;
             let addr = link.local_addr().map_err(run_err)?;
             // The first line tells a parent where to send (flushed before serving).
             println!("navigation listening on {addr}");
-            let r = fathom_pils::session::navigate_on(&mut link, &s, s.method).map_err(run_err)?;
+            let r = fathom_pils::session::navigate_on(&mut link, &s, &fl).map_err(run_err)?;
             write_files(&r, dir.dir())?;
             commit(dir, scenario, &s, None, t0)?;
             session_result(r, out).map(|r| {
@@ -227,16 +241,16 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
         Some(PilsSide::Offline {
             scenario,
             quantized,
-            method,
+            pick,
             out,
         }) => {
-            let s = load(scenario, method.as_deref())?;
+            let s = load(scenario, pick)?;
+            let p = prepare(&s, scenario)?;
             // The output folder is made before the run, so that a bad `--out` costs nothing.
             std::fs::create_dir_all(out)
                 .with_context(|| format!("cannot create `{}` (--out)", out.display()))
                 .map_err(Failure::Usage)?;
-            let csv =
-                fathom_pils::session::offline_csv(&s, s.method, *quantized).map_err(run_err)?;
+            let csv = fathom_pils::session::offline_csv(&p, *quantized).map_err(run_err)?;
             let file = out.join(OFFLINE_CSV);
             std::fs::write(&file, csv)
                 .with_context(|| format!("writing {}", file.display()))
@@ -246,11 +260,11 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
         Some(PilsSide::Compare {
             scenario,
             runs,
-            method,
+            pick,
             out,
             force,
         }) => {
-            let s = load(scenario, method.as_deref())?;
+            let s = load(scenario, pick)?;
             crate::pils_compare::compare(scenario, &s, *runs, out, *force)
         }
         None => {
@@ -259,7 +273,7 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
                     "fathom pils: give a settings file, or `sim` / `nav` / `offline` / `compare`"
                 ))
             })?;
-            let s = load(scenario, a.method.as_deref())?;
+            let s = load(scenario, &a.pick)?;
             let p = prepare(&s, scenario)?;
             let dir = claim(&a.out, a.force)?;
             let (r, addrs) = both(scenario, &s, &p, dir.dir());
@@ -276,8 +290,9 @@ pub fn pils_cmd(a: &PilsArgs) -> Result<String, Failure> {
 
 fn sim_text(r: &SimReport, out: &Path) -> String {
     let mut t = format!(
-        "{} {}: {} of {} steps, {} solutions ({} late), real-time factor {:.1}\n",
+        "{} {}/{}: {} of {} steps, {} solutions ({} late), real-time factor {:.1}\n",
         r.pacing,
+        r.scenario,
         r.method,
         r.steps_sent,
         r.steps_total,

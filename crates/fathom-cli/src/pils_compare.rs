@@ -39,11 +39,15 @@ pub(crate) fn compare(
     }
     // The first run is flown here to check the settings before the folder is claimed.
     let mut first = Some(prepare(s, scenario)?);
+    let flown = first
+        .as_ref()
+        .map(|p| format!("{}/{}", p.flight.scene_name(), p.flight.method.name()))
+        .unwrap_or_default();
     let dir = claim(out, force)?;
-    let result = study(s, runs, dir.dir(), &mut first);
+    let result = study(s, runs, dir.dir(), &mut first, &flown);
     commit(dir, scenario, s, Some(runs), t0)?;
     let c = result?;
-    Ok(c.markdown(&title(s)) + &format!("\noutputs in {}\n", out.display()))
+    Ok(c.markdown(&title(s, &flown)) + &format!("\noutputs in {}\n", out.display()))
 }
 
 /// The sessions and the outputs of the study (into `dir`).
@@ -52,18 +56,21 @@ fn study(
     runs: usize,
     dir: &Path,
     first: &mut Option<Prepared>,
+    flown: &str,
 ) -> Result<Comparison, Failure> {
+    // The sessions' settings name the scenario by its absolute path (they are
+    // written into the sessions' folders).
+    let scenario_abs = std::path::absolute(&s.scenario_path)
+        .context("the scenario's path")
+        .map_err(Failure::Run)?;
     let mut pairs = Vec::with_capacity(runs);
     let mut example: Vec<(&'static str, Vec<(f64, f64)>)> = Vec::new();
     let mut latencies_ms = Vec::new();
     for i in 0..runs as u64 {
         let run = s.file.run + i;
-        let mut file = s.file.clone();
-        file.run = run;
-        let base = file
-            .clone()
-            .check()
-            .map_err(|e| Failure::Usage(anyhow!("{e}")))?;
+        let mut base = s.clone();
+        base.file.run = run;
+        base.file.scenario = scenario_abs.display().to_string();
         let p = match first.take() {
             Some(p) => p,
             None => Prepared::new(&base).map_err(|e| Failure::Run(anyhow!("run {run}: {e}")))?,
@@ -73,17 +80,16 @@ fn study(
             ("lockstep", Pacing::Lockstep),
             ("realtime", Pacing::Realtime),
         ] {
-            let mut f = file.clone();
-            f.link.pacing = pacing;
+            let mut settings = base.clone();
+            settings.file.link.pacing = pacing;
             if pacing == Pacing::Lockstep {
-                f.link.faults = FaultParams::NONE;
+                settings.file.link.faults = FaultParams::NONE;
             }
             let sdir = dir.join(format!("run{run:03}_{label}"));
-            let text = toml::to_string(&f)
+            let text = toml::to_string(&settings.file)
                 .context("settings as TOML")
                 .map_err(Failure::Run)?;
             write_named(&sdir, &[("scenario.toml", text)])?;
-            let settings = f.check().map_err(|e| Failure::Usage(anyhow!("{e}")))?;
             let (r, _) = both(&sdir.join("scenario.toml"), &settings, &p, &sdir);
             let r = r?;
             if let Some(e) = &r.error {
@@ -130,8 +136,8 @@ fn study(
             realtime_latency_ms: rt.latency.map_or([f64::NAN; 2], |q| [q.p50_ms, q.p95_ms]),
         });
     }
-    let c = Comparison::new(pairs, s.file.seed).map_err(run_err)?;
-    write_named(dir, &c.files(s).map_err(run_err)?)?;
+    let c = Comparison::new(pairs, s.seed).map_err(run_err)?;
+    write_named(dir, &c.files(s, flown).map_err(run_err)?)?;
     let figures =
         fathom_pils::figures::study_figures(&c, &example, &latencies_ms).map_err(run_err)?;
     write_named(dir, &figures)?;

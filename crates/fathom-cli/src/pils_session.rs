@@ -49,7 +49,7 @@ pub(crate) fn commit(
         runs,
         threads: None,
         seed: None,
-        base_seed: Some(s.file.seed),
+        base_seed: Some(s.seed),
         elapsed_s: t0.elapsed().as_secs_f64(),
         files: Vec::new(),
     };
@@ -127,8 +127,12 @@ fn both_inner(
             "127.0.0.1:0",
             "--sim",
             &sim_addr.to_string(),
+            "--scene",
+            p.flight.scene_name(),
             "--method",
-            s.method.name(),
+            p.flight.method.name(),
+            "--run",
+            &p.flight.run.to_string(),
             "--out",
         ])
         .arg(dir.join("nav"))
@@ -166,7 +170,7 @@ fn both_inner(
             peer_system: fathom_pils::frame::NAV_SYSTEM,
             signing: s.key().map(|k| (k, 0)),
             faults: s.file.link.faults,
-            fault_seed: s.file.seed ^ 0x5111_0001 ^ s.file.run.rotate_left(17),
+            fault_seed: s.seed ^ 0x5111_0001 ^ s.file.run.rotate_left(17),
         },
     )
     .and_then(|mut link| fathom_pils::session::simulate_prepared(&mut link, s, p, true))

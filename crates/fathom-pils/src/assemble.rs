@@ -9,17 +9,57 @@ use crate::codec::{
     ImuReading, RangeWire, decode_distance, decode_gps, decode_imu, decode_initial, decode_scan,
     encode_epoch, epoch_from_parts, time_to_usec,
 };
-use crate::epoch::{Epoch, GpsReading, InitialEstimate};
+use crate::epoch::{Epoch, GpsReading, InitialEstimate, SatReading};
 
 /// What is due at a step (both sides derive it from the scenario).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Due {
     /// `HIL_GPS` messages.
     pub gps: usize,
+    /// The raw GNSS measurements (`GNSS_RAW` blocks, as many as their count says).
+    pub raw_gnss: bool,
     /// Range messages (`DISTANCE_SENSOR` or `OBSTACLE_DISTANCE`).
     pub ranges: usize,
     /// The initial estimate.
     pub init: bool,
+}
+
+/// What both sides know of the stream before it starts: the local frame of the GPS
+/// messages, the range sensor on the wire, the step at which navigation starts and
+/// which steps carry which sensors.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Schedule {
+    /// The local frame of `HIL_GPS` positions.
+    pub frame: LocalFrame,
+    /// The range sensor as the wire describes it.
+    pub wire: RangeWire,
+    /// Step at which navigation starts (end of the rest).
+    pub start: u64,
+    /// Steps per GNSS epoch.
+    pub gps_every: u64,
+    /// Steps per range epoch.
+    pub range_every: u64,
+    /// Whether GNSS epochs carry the raw measurements (`GNSS_RAW`).
+    pub raw_gnss: bool,
+    /// What is flown (`crate::identity`; `None`: not said, not checked).
+    pub identity: Option<String>,
+}
+
+impl Schedule {
+    /// What is due at step `k`.
+    pub fn due(&self, k: u64) -> Due {
+        let gnss = k.is_multiple_of(self.gps_every);
+        Due {
+            gps: usize::from(gnss),
+            raw_gnss: gnss && self.raw_gnss,
+            ranges: if k.is_multiple_of(self.range_every) {
+                self.wire.messages()
+            } else {
+                0
+            },
+            init: k == self.start,
+        }
+    }
 }
 
 /// The messages received for one step.
@@ -29,6 +69,9 @@ pub struct StepParts {
     pub imu: Option<ImuReading>,
     /// GPS outputs by receiver id.
     pub gps: Vec<GpsReading>,
+    /// Raw GNSS blocks received, by block index, with the epoch's satellite count.
+    raw_blocks: std::collections::BTreeMap<usize, Vec<SatReading>>,
+    raw_count: Option<usize>,
     /// Range beams received (beam order), `None` until the first range message.
     pub ranges: Option<Vec<Option<f64>>>,
     /// Range messages received (distinct).
@@ -70,6 +113,14 @@ impl StepParts {
                 }
                 None => false,
             },
+            MavMessage::DEBUG_FLOAT_ARRAY(d) => match crate::raw_gnss::decode(d) {
+                Some((block, count, sats)) if self.raw_count.is_none_or(|c| c == count) => {
+                    self.raw_count = Some(count);
+                    self.raw_blocks.insert(block, sats);
+                    true
+                }
+                _ => false,
+            },
             MavMessage::ODOMETRY(d) => match decode_initial(d, 0) {
                 Some(i) => {
                     self.init = Some(i);
@@ -98,10 +149,18 @@ impl StepParts {
         }
     }
 
+    /// The raw GNSS measurements, once every block has arrived.
+    fn raw_gnss(&self) -> Option<Vec<SatReading>> {
+        let n = self.raw_count?;
+        (self.raw_blocks.len() == crate::raw_gnss::messages(n))
+            .then(|| self.raw_blocks.values().flatten().copied().collect())
+    }
+
     /// Whether everything `due` has arrived.
     pub fn complete(&self, due: &Due) -> bool {
         self.imu.is_some()
             && self.gps.len() >= due.gps
+            && (!due.raw_gnss || self.raw_gnss().is_some())
             && self.range_messages >= due.ranges
             && (!due.init || self.init.is_some())
     }
@@ -109,11 +168,13 @@ impl StepParts {
     /// The epoch of step `step` after the IMU stamp `prev_usec` (needs the IMU).
     pub fn into_epoch(self, step: u64, prev_usec: u64, _wire: &RangeWire) -> Option<Epoch> {
         let imu = self.imu?;
+        let raw = self.raw_gnss();
         Some(epoch_from_parts(
             step,
             &imu,
             prev_usec,
             self.gps,
+            raw,
             self.ranges,
         ))
     }

@@ -138,6 +138,9 @@ pub fn encode_epoch(e: &Epoch, frame: &LocalFrame, wire: &RangeWire) -> Vec<MavM
     for g in &e.gps {
         out.push(MavMessage::HIL_GPS(encode_gps(usec, g, frame)));
     }
+    if let Some(sats) = &e.raw_gnss {
+        out.extend(crate::raw_gnss::encode(usec, sats));
+    }
     if let Some(r) = &e.ranges {
         out.extend(encode_ranges(usec, r, wire));
     }
@@ -355,6 +358,7 @@ pub fn epoch_from_parts(
     imu: &ImuReading,
     prev_usec: u64,
     gps: Vec<GpsReading>,
+    raw_gnss: Option<Vec<crate::epoch::SatReading>>,
     ranges: Option<Vec<Option<f64>>>,
 ) -> Epoch {
     let dt = usec_to_time(imu.time_usec.saturating_sub(prev_usec));
@@ -366,6 +370,7 @@ pub fn epoch_from_parts(
         delta_v: imu.accel * dt,
         pressure_pa: imu.pressure_pa,
         gps,
+        raw_gnss,
         ranges,
     }
 }

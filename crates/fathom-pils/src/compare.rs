@@ -197,21 +197,26 @@ fn row(method: &str, metric: &str, s: &MetricSummary) -> Row {
 impl Comparison {
     /// The study's text files (name, content): `runs.csv` ([`Comparison::runs_csv`]),
     /// `report.md` ([`Comparison::markdown`] under [`title`]), `comparison.json`
-    /// (everything) and `summary.json` ([`Comparison::summary`]). The figures are
+    /// (everything) and `summary.json` ([`Comparison::summary`]); `flown` names the
+    /// scene and method (`bridge/GREKF`). The figures are
     /// `crate::figures::study_figures`; the caller writes both.
     ///
     /// # Errors
     /// [`PilsError::Model`] if a file cannot be formatted.
-    pub fn files(&self, s: &Settings) -> Result<Vec<(&'static str, String)>, PilsError> {
+    pub fn files(
+        &self,
+        s: &Settings,
+        flown: &str,
+    ) -> Result<Vec<(&'static str, String)>, PilsError> {
         let json = serde_json::to_string_pretty(self)
             .map_err(|e| PilsError::model("comparison.json", e))?;
         let summary = self
-            .summary(s.method.name(), s.file.seed)
+            .summary(flown, s.seed)
             .to_json_pretty()
             .map_err(|e| PilsError::model("summary.json", e))?;
         Ok(vec![
             ("runs.csv", self.runs_csv()?),
-            ("report.md", self.markdown(&title(s))),
+            ("report.md", self.markdown(&title(s, flown))),
             ("comparison.json", json),
             ("summary.json", summary),
         ])
@@ -239,29 +244,42 @@ impl Comparison {
         }
         s += &format!(
             "\n## Over {} runs (mean [95 % CI]: BCa bootstrap per pacing, Student t for the \
-             paired difference; median; runs beyond 10x the median)\n\n\
+             paired difference; median [distribution-free 95 % CI from order statistics, \
+             from six runs on]; runs beyond 10x the median; for the difference, the runs \
+             where realtime was worse)\n\n\
              | metric | lockstep | realtime | realtime - lockstep (paired) |\n\
              | --- | --- | --- | --- |\n",
             self.runs.len()
         );
-        let fmt = |m: &MetricSummary| {
+        let fmt = |m: &MetricSummary, extra: String| {
             let [lo, hi] = m.ci95.unwrap_or([m.mean; 2]);
+            let median_ci = m
+                .median_ci95
+                .map_or(String::new(), |[a, b]| format!(" [{a:.3}, {b:.3}]"));
             let diverged = m.divergence.map_or(String::new(), |d| {
                 format!("; {} of {} diverged", d.runs, m.n)
             });
             format!(
-                "{:.3} [{lo:.3}, {hi:.3}] (median {:.3}{diverged})",
+                "{:.3} [{lo:.3}, {hi:.3}] (median {:.3}{median_ci}{diverged}{extra})",
                 m.mean, m.median
             )
         };
-        for m in &self.metrics {
+        for (i, m) in self.metrics.iter().enumerate() {
+            let worse = self
+                .runs
+                .iter()
+                .filter(|r| r.realtime.metrics()[i].1 > r.lockstep.metrics()[i].1)
+                .count();
             s += &format!(
                 "| {} ({}) | {} | {} | {} |\n",
                 m.metric,
                 unit(m.metric),
-                fmt(&m.lockstep),
-                fmt(&m.realtime),
-                fmt(&m.difference)
+                fmt(&m.lockstep, String::new()),
+                fmt(&m.realtime, String::new()),
+                fmt(
+                    &m.difference,
+                    format!("; worse in {worse} of {} runs", self.runs.len())
+                )
             );
         }
         s += &format!(
@@ -274,12 +292,11 @@ impl Comparison {
     }
 }
 
-/// The study's title: the method and the realtime link's faults.
-pub fn title(s: &Settings) -> String {
+/// The study's title: what was flown (`scene/method`) and the realtime link's faults.
+pub fn title(s: &Settings, flown: &str) -> String {
     let f = &s.file.link.faults;
     format!(
-        "PILS {}: realtime (loss {:.0} %, latency {:.0} +- {:.0} ms) vs lockstep",
-        s.method.name(),
+        "PILS {flown}: realtime (loss {:.0} %, latency {:.0} +- {:.0} ms) vs lockstep",
         100.0 * f.loss,
         1e3 * f.latency_s,
         1e3 * f.jitter_s
@@ -343,6 +360,15 @@ pub(crate) mod tests {
         assert!((c.solution_fraction - 0.9).abs() < 1e-12);
         let md = c.markdown("t");
         assert!(md.contains("| rmse_3d (m) | 2.000 ["), "{md}");
+        assert!(md.contains("; worse in 3 of 3 runs) |"), "{md}");
+        // Six runs give the order-statistic interval of the median (x_(1), x_(6)).
+        let six: Vec<RunPair> = (0..6)
+            .map(|i| pair(i, 1.0, 1.0 + [0.3, -0.1, 0.2, 0.4, -0.2, 0.1][i as usize]))
+            .collect();
+        let md6 = Comparison::new(six, 5).unwrap().markdown("t");
+        let line = md6.lines().find(|l| l.starts_with("| rmse_3d")).unwrap();
+        assert!(line.contains("[-0.200, 0.400]"), "{line}");
+        assert!(line.contains("; worse in 4 of 6 runs) |"), "{line}");
         let csv = c.runs_csv().unwrap();
         assert_eq!(csv.lines().count(), 4);
         assert!(csv.starts_with("run,steps,realtime_solutions,"), "{csv}");

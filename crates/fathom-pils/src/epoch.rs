@@ -30,6 +30,17 @@ pub struct GpsFixReading {
     pub vdop: f64,
 }
 
+/// One satellite above the elevation mask as a raw-measurement receiver reports it:
+/// where it is and, when its signal was received (in line of sight, or reflected),
+/// the pseudorange. The navigation tests its line of sight against its own map.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SatReading {
+    /// Satellite position, ECEF, m.
+    pub pos_ecef: Vector3<f64>,
+    /// Pseudorange, m, when a signal was received.
+    pub pseudorange_m: Option<f64>,
+}
+
 /// The sensor data of one IMU step: the increment over the step and the events at
 /// its end time.
 #[derive(Debug, Clone, PartialEq)]
@@ -48,6 +59,9 @@ pub struct Epoch {
     pub pressure_pa: Option<f64>,
     /// GNSS outputs at this instant.
     pub gps: Vec<GpsReading>,
+    /// Raw GNSS measurements at this instant (every satellite above the mask), for a
+    /// navigation that chooses its satellites itself.
+    pub raw_gnss: Option<Vec<SatReading>>,
     /// Range-sensor / lidar scan at this instant: per beam in beam order, the
     /// measured range (m) or `None` (no return).
     pub ranges: Option<Vec<Option<f64>>>,

@@ -8,13 +8,16 @@
 //! | --- | --- |
 //! | [`epoch`] | what crosses the link, in SI units |
 //! | [`codec`] | epochs, initial estimate, solution <-> MAVLink messages: the quantization |
+//! | [`raw_gnss`] | raw GNSS measurements (satellite positions, pseudoranges) in `DEBUG_FLOAT_ARRAY` blocks |
+//! | [`identity`] | what the simulator flies, said on the link and checked by the navigation |
 //! | [`assemble`] | the messages of one step gathered into an epoch |
 //! | [`frame`] | MAVLink 2 frames on datagrams, signing, the never-panicking parser |
 //! | [`faults`] | loss, latency and jitter, reordering, duplicates, corruption, junk |
 //! | [`link`] | a UDP endpoint: peer filter, faults on send, counters |
 //! | [`stats`] | counters per message type and drop reason, latency percentiles |
-//! | [`settings`] | the `[pils]` settings (pacing, timeout, faults, signing) |
-//! | [`scenario`] | the flight, sensors and navigation a PILS run uses |
+//! | [`settings`] | the settings: the `urban` scenario flown (scene, method, run) and the link (pacing, timeout, faults, signing) |
+//! | [`source`] | the two traits the sides see the run through |
+//! | [`urban_flight`] | the `urban` experiment's own flight, sensors and navigation on the link |
 //! | [`sim`], [`nav`] | the two processes' loops |
 //! | [`report`] | evaluation, offline references, a session's output files (`summary.json` in the shared contract) |
 //! | [`compare`] | lockstep vs realtime over runs: paired differences with CIs, the study's files |
@@ -27,14 +30,17 @@ pub mod epoch;
 pub mod faults;
 pub mod figures;
 pub mod frame;
+pub mod identity;
 pub mod link;
 pub mod nav;
+pub mod raw_gnss;
 pub mod report;
-pub mod scenario;
 pub mod session;
 pub mod settings;
 pub mod sim;
+pub mod source;
 pub mod stats;
+pub mod urban_flight;
 
 /// Errors of a PILS run.
 #[derive(Debug, thiserror::Error)]

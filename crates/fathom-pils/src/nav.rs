@@ -13,14 +13,15 @@ use std::time::{Duration, Instant};
 use mavlink::dialects::common::{MavMessage, MavState, ODOMETRY_DATA};
 
 use crate::PilsError;
+use crate::assemble::Schedule;
 use crate::assemble::StepParts;
 use crate::codec::{encode_solution, time_to_usec};
 use crate::epoch::Solution;
 use crate::frame::{NAV_SYSTEM, SIM_SYSTEM};
 use crate::link::{Link, LinkSetup, Peer};
-use crate::scenario::{IMU_DT, Navigator, Shared};
 use crate::settings::{Pacing, Settings};
 use crate::sim::heartbeat;
+use crate::source::{IMU_DT, Navigator};
 use crate::stats::Drop;
 
 /// The navigation side's link: peer fixed to `sim` when given, else latched.
@@ -40,7 +41,7 @@ pub fn nav_link(
             peer_system: SIM_SYSTEM,
             signing: s.key().map(|k| (k, 1)),
             faults: s.file.link.faults,
-            fault_seed: s.file.seed ^ 0x5111_0002 ^ s.file.run.rotate_left(17),
+            fault_seed: s.seed ^ 0x5111_0002 ^ s.file.run.rotate_left(17),
         },
     )
 }
@@ -68,6 +69,7 @@ fn stamp_step(m: &MavMessage) -> Option<u64> {
     match m {
         MavMessage::HIL_SENSOR(d) => Some(step_of(d.time_usec)),
         MavMessage::HIL_GPS(d) => Some(step_of(d.time_usec)),
+        MavMessage::DEBUG_FLOAT_ARRAY(d) => Some(step_of(d.time_usec)),
         MavMessage::OBSTACLE_DISTANCE(d) => Some(step_of(d.time_usec)),
         MavMessage::DISTANCE_SENSOR(d) => Some(step_of(u64::from(d.time_boot_ms) * 1000)),
         MavMessage::ODOMETRY(d) => Some(step_of(d.time_usec)),
@@ -79,7 +81,12 @@ fn stamp_step(m: &MavMessage) -> Option<u64> {
 const MAX_AHEAD: u64 = 1000;
 
 /// Runs the navigation over `link` until the simulator ends or goes silent.
-pub fn run_nav(link: &mut Link, sh: &Shared, nav: &mut dyn Navigator, s: &Settings) -> NavOutcome {
+pub fn run_nav(
+    link: &mut Link,
+    sh: &Schedule,
+    nav: &mut dyn Navigator,
+    s: &Settings,
+) -> NavOutcome {
     let mut out = NavOutcome::default();
     out.error = serve(link, sh, nav, s, &mut out).err();
     let _ = link.flush_all();
@@ -103,7 +110,7 @@ fn answer(k: u64, sol: Option<&Solution>) -> MavMessage {
 
 fn serve(
     link: &mut Link,
-    sh: &Shared,
+    sh: &Schedule,
     nav: &mut dyn Navigator,
     s: &Settings,
     out: &mut NavOutcome,
@@ -135,6 +142,26 @@ fn serve(
             continue;
         }
         let name = crate::frame::name_of(&m);
+        if let MavMessage::STATUSTEXT(d) = &m {
+            match (crate::identity::decode(d), &sh.identity) {
+                (Some(theirs), Some(ours)) => {
+                    let ours = crate::identity::wire_text(ours);
+                    if theirs != ours {
+                        return Err(PilsError::setting(
+                            "scenario",
+                            &theirs,
+                            format!(
+                                "the simulator flies this, the navigation `{ours}`: start both \
+                                 with the same file, --scene, --method and --run"
+                            ),
+                        ));
+                    }
+                }
+                (Some(_), None) => {}
+                (None, _) => link.counters.count_rejected(name, Drop::UnexpectedType),
+            }
+            continue;
+        }
         // Real time: the initial estimate is repeated by the simulator until the
         // navigation has started; it is kept apart from the steps (whose order jitter
         // scrambles) and used at the first step processed from the start step on.

@@ -9,11 +9,13 @@ use fathom_report::output::{CsvWriter, Row, Summary, csv_string};
 use serde::Serialize;
 
 use crate::PilsError;
+use crate::assemble::Schedule;
 use crate::assemble::quantize_epochs;
 use crate::codec::{quantize_initial, quantize_solution};
-use crate::epoch::Solution;
-use crate::scenario::{IMU_DT, MapAidedNav, Method, Navigator, SensorSource, Shared, SimulatedRun};
+use crate::epoch::{Epoch, InitialEstimate, Solution};
+use crate::source::{IMU_DT, Navigator, SensorSource};
 use crate::stats::{LinkCounters, Percentiles};
+use crate::urban_flight::{UrbanFlight, UrbanNav, UrbanRun};
 
 /// Per-run error statistics of one method (evaluated at every step with a solution
 /// after the start).
@@ -121,32 +123,55 @@ pub fn error_3d_series(src: &dyn SensorSource, sols: &BTreeMap<u64, Solution>) -
         .collect()
 }
 
-/// Runs `method` offline on the simulated run: with `quantized`, every measurement,
+/// Runs the flight's method offline on the simulated run: with `quantized`, every measurement,
 /// the initial estimate and every solution go through the MAVLink encode / decode
 /// functions (what the lockstep PILS run sees); without, the `f64` values.
 ///
 /// # Errors
 /// [`PilsError::Model`] when the navigation fails.
 pub fn offline(
-    sh: &Shared,
-    run: &SimulatedRun,
-    method: Method,
+    fl: &UrbanFlight,
+    run: &UrbanRun,
+    quantized: bool,
+) -> Result<BTreeMap<u64, Solution>, PilsError> {
+    let env = fl.env();
+    let mut nav = UrbanNav::new(fl, &env);
+    offline_with(
+        &fl.schedule,
+        run.epochs(),
+        run.initial(),
+        &mut nav,
+        quantized,
+    )
+}
+
+/// Runs the navigator `nav` offline over `epochs` (step 1 onward) with the initial
+/// estimate `init` at the schedule's start step; with `quantized`, the measurements,
+/// the initial estimate and the solutions go through the MAVLink encode / decode
+/// functions (what a lockstep session sees).
+///
+/// # Errors
+/// [`PilsError::Model`] when the navigation fails.
+pub fn offline_with(
+    schedule: &Schedule,
+    epochs: &[Epoch],
+    init: &InitialEstimate,
+    nav: &mut dyn Navigator,
     quantized: bool,
 ) -> Result<BTreeMap<u64, Solution>, PilsError> {
     let epochs = if quantized {
-        quantize_epochs(run.epochs(), &sh.frame, &sh.wire, 0.0)
+        quantize_epochs(epochs, &schedule.frame, &schedule.wire, 0.0)
     } else {
-        run.epochs().to_vec()
+        epochs.to_vec()
     };
     let init = if quantized {
-        quantize_initial(run.initial())
+        quantize_initial(init)
     } else {
-        *run.initial()
+        *init
     };
-    let mut nav = MapAidedNav::new(sh, method)?;
     let mut out = BTreeMap::new();
     for e in &epochs {
-        let i = (e.step == sh.start).then_some(&init);
+        let i = (e.step == schedule.start).then_some(&init);
         if let Some(s) = nav.step(e, i)? {
             out.insert(e.step, if quantized { quantize_solution(&s) } else { s });
         }
@@ -161,6 +186,8 @@ pub struct SimReport {
     pub status: String,
     /// Method flown.
     pub method: String,
+    /// The scene flown (the `urban` scenario's name for it).
+    pub scenario: String,
     /// Pacing.
     pub pacing: String,
     /// Steps sent.
@@ -204,7 +231,7 @@ pub const SEED_DOC: &str = "004_a46751abbc309235.txt";
 /// `fathom_report::output::read_summary_json`) of one run (`runs` 1, `base_seed` the
 /// settings' `seed`), rows `<pils|offline_quantized|offline>/<method>` x
 /// [`ErrorStats::metrics`] (no paper value, no interval for one run), no claims, and
-/// the extra keys `method`, `pacing`, `run` (the settings' run index), `status` and
+/// the extra keys `method`, `scenario` (the scene), `pacing`, `run` (the settings' run index), `status` and
 /// `equal_to_offline_quantized` (`null` when the references were not run). JSON has
 /// no NaN: a metric that is not finite (a diverged navigation) gets no row and is
 /// named in the extra key `non_finite` instead.
@@ -217,7 +244,7 @@ pub fn sim_summary(r: &SimReport, seed: u64, run: u64) -> Summary {
         ("offline", &r.offline),
     ] {
         for (m, v) in st.iter().flat_map(ErrorStats::metrics) {
-            let method = format!("{label}/{}", r.method);
+            let method = format!("{label}/{}/{}", r.scenario, r.method);
             if v.is_finite() {
                 s.push_row(Row::new(method, m, v).with_unit(unit(m)));
             } else {
@@ -227,6 +254,7 @@ pub fn sim_summary(r: &SimReport, seed: u64, run: u64) -> Summary {
     }
     let extra = [
         ("method", serde_json::json!(r.method)),
+        ("scenario", serde_json::json!(r.scenario)),
         ("pacing", serde_json::json!(r.pacing)),
         ("run", serde_json::json!(run)),
         ("status", serde_json::json!(r.status)),
@@ -349,6 +377,7 @@ mod tests {
         SimReport {
             status: "ok".into(),
             method: "MGPMF".into(),
+            scenario: "buildings".into(),
             pacing: "lockstep".into(),
             steps_sent: 100,
             steps_total: 100,
@@ -396,8 +425,11 @@ mod tests {
         );
         assert_eq!(back.seed_doc, SEED_DOC);
         assert_eq!(back.rows.len(), 18);
-        assert_eq!(back.row("pils/MGPMF", "rmse_3d").unwrap().value, 1.25);
-        assert!(back.row("offline/MGPMF", "rmse_3d").is_none());
+        assert_eq!(
+            back.row("pils/buildings/MGPMF", "rmse_3d").unwrap().value,
+            1.25
+        );
+        assert!(back.row("offline/buildings/MGPMF", "rmse_3d").is_none());
         assert!(back.claims.is_empty());
         assert_eq!(back.extra["run"], 3);
         assert_eq!(back.extra["pacing"], "lockstep");
@@ -413,8 +445,8 @@ mod tests {
         let mut r = report();
         r.pils = Some(stats(f64::NAN));
         let s = sim_summary(&r, 42, 3);
-        assert!(s.row("pils/MGPMF", "rmse_3d").is_none());
-        assert_eq!(s.extra["non_finite"][0], "pils/MGPMF rmse_3d");
+        assert!(s.row("pils/buildings/MGPMF", "rmse_3d").is_none());
+        assert_eq!(s.extra["non_finite"][0], "pils/buildings/MGPMF rmse_3d");
         assert!(s.to_json_pretty().is_ok());
     }
 }

@@ -12,10 +12,11 @@ use crate::PilsError;
 use crate::link::Link;
 use crate::nav::{nav_link, run_nav};
 use crate::report::{SimReport, error_3d_series, evaluate, offline, sim_files, solutions_csv};
-use crate::scenario::{IMU_DT, MapAidedNav, Method, Shared, SimulatedRun};
 use crate::settings::{Pacing, Settings};
 use crate::sim::{latency_summary, run_sim, sim_link};
+use crate::source::{IMU_DT, SensorSource};
 use crate::stats::LinkCounters;
+use crate::urban_flight::{UrbanFlight, UrbanNav, UrbanRun};
 
 /// What one side of a session produced.
 #[derive(Debug)]
@@ -43,22 +44,44 @@ pub struct SimSeries {
 /// The run of a session, checked and flown before any socket or process is used:
 /// a bad setting is reported once, before the navigation side is started.
 pub struct Prepared {
-    /// The world and schedule.
-    pub shared: Shared,
+    /// The scenario prepared, the scene, method and run, the stream's schedule.
+    pub flight: UrbanFlight,
     /// The flight and its sensor epochs.
-    pub run: SimulatedRun,
+    pub run: UrbanRun,
 }
 
 impl Prepared {
-    /// Checks the flight settings, builds the world and flies the run.
+    /// Checks the settings and the `urban` scenario, builds its world and flies the
+    /// run.
     ///
     /// # Errors
     /// [`PilsError::Setting`] / [`PilsError::Model`] naming what is wrong.
     pub fn new(s: &Settings) -> Result<Self, PilsError> {
-        let shared = Shared::new(s.file.flight.clone())?;
-        let run = SimulatedRun::new(&shared, s.file.seed, s.file.run)?;
-        Ok(Self { shared, run })
+        let flight = flight_of(s)?;
+        let run = UrbanRun::new(&flight)?;
+        Ok(Self { flight, run })
     }
+}
+
+/// The flight the settings name (the world built, nothing flown).
+///
+/// # Errors
+/// The scenario's errors; a scene or method the scenario does not have.
+pub fn flight_of(s: &Settings) -> Result<UrbanFlight, PilsError> {
+    let file = s.scenario_path.display().to_string();
+    let base = s
+        .scenario_path
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(std::path::Path::new("."));
+    UrbanFlight::load(
+        &s.scenario_text,
+        &file,
+        base,
+        s.file.scene.as_deref(),
+        s.file.method.as_deref(),
+        s.file.run,
+    )
 }
 
 /// The simulator side on a bound link (`offline_refs`: also run the two offline
@@ -86,8 +109,8 @@ pub fn simulate_prepared(
     p: &Prepared,
     offline_refs: bool,
 ) -> Result<Session<SimReport>, PilsError> {
-    let (sh, run) = (&p.shared, &p.run);
-    let o = run_sim(link, sh, run, s);
+    let (fl, run) = (&p.flight, &p.run);
+    let o = run_sim(link, &fl.schedule, run, s);
     let mut series = SimSeries {
         error_3d: vec![("PILS", error_3d_series(run, &o.solutions))],
         latencies_s: o.latencies.clone(),
@@ -96,8 +119,8 @@ pub fn simulate_prepared(
     let (mut oq, mut of, mut equal, mut diff) = (None, None, None, Default::default());
     // A failed session is not compared (and ends quickly: within the timeout).
     if offline_refs && o.error.is_none() {
-        let q = offline(sh, run, s.method, true)?;
-        let f = offline(sh, run, s.method, false)?;
+        let q = offline(fl, run, true)?;
+        let f = offline(fl, run, false)?;
         oq = Some(evaluate(run, &q));
         let fs = evaluate(run, &f);
         series
@@ -123,7 +146,8 @@ pub fn simulate_prepared(
             .error
             .as_ref()
             .map_or_else(|| "ok".to_string(), ToString::to_string),
-        method: s.method.name().into(),
+        method: fl.method.name().into(),
+        scenario: fl.scene_name().into(),
         pacing: match s.file.link.pacing {
             Pacing::Lockstep => "lockstep".into(),
             Pacing::Realtime => "realtime".into(),
@@ -148,7 +172,7 @@ pub fn simulate_prepared(
         difference_to_offline: diff,
         equal_to_offline_quantized: equal,
     };
-    let files = sim_files(&report, &o.solutions, s.file.seed, s.file.run)?;
+    let files = sim_files(&report, &o.solutions, fl.seed, fl.run)?;
     Ok(Session {
         report,
         files,
@@ -157,8 +181,7 @@ pub fn simulate_prepared(
     })
 }
 
-fn run_steps(r: &SimulatedRun) -> u64 {
-    use crate::scenario::SensorSource;
+fn run_steps(r: &UrbanRun) -> u64 {
     r.steps()
 }
 
@@ -177,6 +200,8 @@ pub struct NavReport {
     pub status: String,
     /// Method.
     pub method: String,
+    /// The scene flown (the `urban` scenario's name for it).
+    pub scenario: String,
     /// Steps processed.
     pub steps: u64,
     /// Steps processed with parts missing, or dropped (real time).
@@ -187,8 +212,8 @@ pub struct NavReport {
     pub link: LinkCounters,
 }
 
-/// The navigation side on a bound link: runs `method`; its files are `nav.json`
-/// and `solutions.csv` (full precision).
+/// The navigation side on a bound link: runs the flight's method; its files are
+/// `nav.json` and `solutions.csv` (full precision).
 ///
 /// # Errors
 /// [`PilsError`] when the navigation cannot be set up; link failures are in
@@ -196,17 +221,18 @@ pub struct NavReport {
 pub fn navigate_on(
     link: &mut Link,
     s: &Settings,
-    method: Method,
+    fl: &UrbanFlight,
 ) -> Result<Session<NavReport>, PilsError> {
-    let sh = Shared::new(s.file.flight.clone())?;
-    let mut nav = MapAidedNav::new(&sh, method)?;
-    let o = run_nav(link, &sh, &mut nav, s);
+    let env = fl.env();
+    let mut nav = UrbanNav::new(fl, &env);
+    let o = run_nav(link, &fl.schedule, &mut nav, s);
     let r = NavReport {
         status: o
             .error
             .as_ref()
             .map_or_else(|| "ok".to_string(), ToString::to_string),
-        method: method.name().into(),
+        method: fl.method.name().into(),
+        scenario: fl.scene_name().into(),
         steps: o.steps,
         incomplete_steps: o.incomplete_steps,
         solutions: o.solutions.len(),
@@ -243,25 +269,24 @@ pub fn bind_nav(
 ///
 /// # Errors
 /// As [`offline`].
-pub fn offline_csv(s: &Settings, method: Method, quantized: bool) -> Result<String, PilsError> {
-    let sh = Shared::new(s.file.flight.clone())?;
-    let run = SimulatedRun::new(&sh, s.file.seed, s.file.run)?;
-    let sols = offline(&sh, &run, method, quantized)?;
-    solutions_csv(&sols)
+pub fn offline_csv(p: &Prepared, quantized: bool) -> Result<String, PilsError> {
+    solutions_csv(&offline(&p.flight, &p.run, quantized)?)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::settings::PilsFile;
+    use crate::urban_flight::tests::short_bridge;
 
-    /// A short flight (one 50 m leg, 1 s of rest): about 3,500 steps.
+    /// The short bridge of the `urban` preset, GREKF, with `link` settings.
     fn settings(link: &str) -> Settings {
-        PilsFile::parse(&format!(
-            "experiment = \"pils\"\nmethod = \"MGPMF\"\n[flight]\nlegs = 1\nside_m = 50.0\n\
-             rest_s = 1.0\nhover_s = 0.5\n[link]\ntimeout_s = 5.0\nretransmit_s = 0.02\n{link}"
-        ))
-        .unwrap()
+        let mut s =
+            Settings::from_text(&short_bridge(), std::path::Path::new("urban.toml")).unwrap();
+        s.file.method = Some("GREKF".into());
+        s.file.link =
+            toml::from_str(&format!("timeout_s = 5.0\nretransmit_s = 0.02\n{link}")).unwrap();
+        s.file.link.check().unwrap();
+        s
     }
 
     /// Both sides in threads on loopback; the simulator's session.
@@ -270,11 +295,18 @@ mod tests {
         let mut nav_link = bind_nav(s, any, None).unwrap();
         let nav_addr = nav_link.local_addr().unwrap();
         let ns = s.clone();
-        let nav = std::thread::spawn(move || navigate_on(&mut nav_link, &ns, ns.method).unwrap());
+        let nav = std::thread::spawn(move || {
+            let fl = flight_of(&ns).unwrap();
+            navigate_on(&mut nav_link, &ns, &fl).unwrap()
+        });
         let mut link = bind_sim(s, any, nav_addr).unwrap();
         let r = simulate_on(&mut link, s, false).unwrap();
         let n = nav.join().unwrap();
         assert!(n.error.is_none(), "{:?}", n.error);
+        assert_eq!(
+            (n.report.method.as_str(), n.report.scenario.as_str()),
+            ("GREKF", "bridge")
+        );
         r
     }
 
@@ -284,19 +316,22 @@ mod tests {
     #[test]
     fn lockstep_equals_offline_quantized_run_even_with_faults() {
         let s = settings(
-            "signing_passphrase = \"k\"\n[link.faults]\nloss = 0.03\nreorder = 0.03\n\
+            "signing_passphrase = \"k\"\n[faults]\nloss = 0.03\nreorder = 0.03\n\
              duplicate = 0.03\ncorrupt = 0.03\njunk = 0.03\n",
         );
         let r = session(&s);
         assert!(r.error.is_none(), "{:?}", r.error);
-        let sh = Shared::new(s.file.flight.clone()).unwrap();
-        let run = SimulatedRun::new(&sh, s.file.seed, s.file.run).unwrap();
-        let q = offline(&sh, &run, s.method, true).unwrap();
-        let f = offline(&sh, &run, s.method, false).unwrap();
+        let p = Prepared::new(&s).unwrap();
+        let q = offline(&p.flight, &p.run, true).unwrap();
+        let f = offline(&p.flight, &p.run, false).unwrap();
         let csv = |name: &str| r.files.iter().find(|(n, _)| *n == name).unwrap().1.clone();
         assert_eq!(csv("solutions.csv"), solutions_csv(&q).unwrap());
         assert_ne!(solutions_csv(&q).unwrap(), solutions_csv(&f).unwrap());
         assert_eq!(r.report.solutions, q.len());
+        assert_eq!(
+            (r.report.method.as_str(), r.report.scenario.as_str()),
+            ("GREKF", "bridge")
+        );
         let c = &r.report.link;
         assert!(c.datagrams_lost_injected > 0 && c.junk_sent > 0, "{c:?}");
         assert!(r.report.retransmissions > 0);

@@ -15,12 +15,13 @@ use mavlink::dialects::common::{
 };
 
 use crate::PilsError;
+use crate::assemble::Schedule;
 use crate::codec::{decode_solution, encode_epoch, encode_initial, time_to_usec};
 use crate::epoch::Solution;
 use crate::frame::{NAV_SYSTEM, SIM_SYSTEM};
 use crate::link::{Link, LinkSetup, Peer};
-use crate::scenario::{IMU_DT, SensorSource, Shared};
 use crate::settings::{Pacing, Settings};
+use crate::source::{IMU_DT, SensorSource};
 use crate::stats::{Drop, latency_percentiles};
 
 /// A `HEARTBEAT` with a system status.
@@ -67,13 +68,13 @@ pub fn sim_link(local: SocketAddr, nav: SocketAddr, s: &Settings) -> Result<Link
             peer_system: NAV_SYSTEM,
             signing: s.key().map(|k| (k, 0)),
             faults: s.file.link.faults,
-            fault_seed: s.file.seed ^ 0x5111_0001 ^ s.file.run.rotate_left(17),
+            fault_seed: s.seed ^ 0x5111_0001 ^ s.file.run.rotate_left(17),
         },
     )
 }
 
 /// Runs the session over `link` (module docs).
-pub fn run_sim(link: &mut Link, sh: &Shared, src: &dyn SensorSource, s: &Settings) -> SimOutcome {
+pub fn run_sim(link: &mut Link, sh: &Schedule, src: &dyn SensorSource, s: &Settings) -> SimOutcome {
     let mut out = SimOutcome::default();
     let t0 = Instant::now();
     let r = match s.file.link.pacing {
@@ -92,8 +93,14 @@ pub fn run_sim(link: &mut Link, sh: &Shared, src: &dyn SensorSource, s: &Setting
     out
 }
 
-fn step_messages(sh: &Shared, src: &dyn SensorSource, k: u64) -> Vec<MavMessage> {
+fn step_messages(sh: &Schedule, src: &dyn SensorSource, k: u64) -> Vec<MavMessage> {
     let mut v = Vec::new();
+    // What is flown, with every step of the rest (a copy may be lost).
+    if let Some(id) = &sh.identity
+        && k <= sh.start
+    {
+        v.push(crate::identity::encode(id));
+    }
     if k == sh.start {
         v.push(MavMessage::ODOMETRY(encode_initial(src.initial())));
     }
@@ -133,7 +140,7 @@ fn take(link: &mut Link, m: MavMessage, out: &mut SimOutcome) -> Option<u64> {
 
 fn lockstep(
     link: &mut Link,
-    sh: &Shared,
+    sh: &Schedule,
     src: &dyn SensorSource,
     s: &Settings,
     out: &mut SimOutcome,
@@ -185,7 +192,7 @@ fn lockstep(
 
 fn realtime(
     link: &mut Link,
-    sh: &Shared,
+    sh: &Schedule,
     src: &dyn SensorSource,
     s: &Settings,
     out: &mut SimOutcome,

@@ -136,15 +136,20 @@ fn plaza_replay_and_conversion_write_into_fathom_out() {
     );
 }
 
-/// A short PILS flight (one 50 m leg, about 35 s simulated), lockstep.
-const PILS: &str = "experiment = \"pils\"\nseed = 3\nmethod = \"MGPMF\"\n[flight]\nlegs = 1\n\
-                    side_m = 50.0\nrest_s = 1.0\nhover_s = 0.5\n[link]\ntimeout_s = 3.0\n\
-                    retransmit_s = 0.02\n";
+/// PILS settings flying `urban.toml` (a short bridge: about 30 s simulated) with the
+/// GREKF, lockstep.
+const PILS: &str = "experiment = \"pils\"\nscenario = \"urban.toml\"\nscene = \"bridge\"\n\
+                    method = \"GREKF\"\n[link]\ntimeout_s = 3.0\nretransmit_s = 0.02\n";
 
 #[test]
 fn pils_sessions_write_into_fathom_out() {
     let root = scratch("default-out-pils");
     std::fs::write(root.join("p.toml"), PILS).unwrap();
+    std::fs::write(
+        root.join("urban.toml"),
+        crate::pils::short_urban(40.0, 20.0),
+    )
+    .unwrap();
     ok(&root, &["pils", "p.toml"]);
     assert!(root.join("fathom-out/pils/sim/pils.json").is_file());
     assert!(root.join("fathom-out/pils/nav/nav.json").is_file());
@@ -172,7 +177,7 @@ fn pils_sessions_write_into_fathom_out() {
     assert!(root.join("fathom-out/pils-nav/nav.json").is_file());
     only_fathom_out(
         &root,
-        &["p.toml", "scenarios"],
+        &["p.toml", "urban.toml", "scenarios"],
         &["pils", "pils-nav", "pils-offline", "pils-sim"],
     );
 }

@@ -37,7 +37,7 @@ mod paper;
 pub mod record;
 mod report;
 pub mod run;
-mod runner;
+pub mod runner;
 pub mod scenario;
 pub mod sense;
 mod settings;

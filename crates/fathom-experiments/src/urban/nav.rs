@@ -86,6 +86,34 @@ pub struct NavCounts {
     pub beams_nonlinear: usize,
 }
 
+/// The initial estimate a method starts from (the surveyed start point and the
+/// alignment, with the run's initial error).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NavStart {
+    /// Time of the start, s.
+    pub time: f64,
+    /// Position, NED, m.
+    pub pos_in_nav: Vector3<f64>,
+    /// Velocity, NED, m/s.
+    pub vel_in_nav: Vector3<f64>,
+    /// Attitude.
+    pub nav_from_body: UnitQuaternion<f64>,
+}
+
+impl NavStart {
+    /// The truth `start` displaced by the initial error `dx0` (position, velocity,
+    /// attitude as a small rotation about N, E, D).
+    pub fn from_truth(start: &LocalTruthSample, dx0: &ErrorVector12) -> Self {
+        Self {
+            time: start.time,
+            pos_in_nav: start.pos_in_nav + dx0.fixed_rows::<3>(0),
+            vel_in_nav: start.vel_in_nav + dx0.fixed_rows::<3>(3),
+            nav_from_body: UnitQuaternion::from_scaled_axis(Vector3::new(dx0[6], dx0[7], dx0[8]))
+                * start.nav_from_body,
+        }
+    }
+}
+
 /// One method running (module docs).
 pub struct Nav {
     method: Method,
@@ -157,27 +185,25 @@ fn fix_of(env: &NavEnv<'_>, pairs: &[(Vector3<f64>, f64)]) -> Option<GpsFix> {
 }
 
 impl Nav {
-    /// `method` started at `t0` from the truth `start` displaced by the initial error
-    /// `dx0` (position, velocity, attitude; the accelerometer-bias estimate starts at
-    /// 0), with the gyro bias from the calibration at rest, in `initial_mode`.
+    /// `method` started from the initial estimate `start` (the accelerometer-bias
+    /// estimate starts at 0), with the gyro bias from the calibration at rest, in
+    /// `initial_mode`.
     ///
     /// # Errors
     /// [`SimError::Model`] for settings the libraries refuse.
     pub fn new(
         method: Method,
         env: &NavEnv<'_>,
-        start: &LocalTruthSample,
-        dx0: &ErrorVector12,
+        start: &NavStart,
         gyro_bias: Vector3<f64>,
         initial_mode: NavMode,
         particle_rng: &ChaCha8Rng,
     ) -> Result<Self, SimError> {
         let f = env.filter;
         let state = LocalLevelState {
-            pos_in_nav: start.pos_in_nav + dx0.fixed_rows::<3>(0),
-            vel_in_nav: start.vel_in_nav + dx0.fixed_rows::<3>(3),
-            nav_from_body: UnitQuaternion::from_scaled_axis(Vector3::new(dx0[6], dx0[7], dx0[8]))
-                * start.nav_from_body,
+            pos_in_nav: start.pos_in_nav,
+            vel_in_nav: start.vel_in_nav,
+            nav_from_body: start.nav_from_body,
         };
         let mech = LocalLevelMechanization::new(state, env.gravity)
             .map_err(|e| model("mechanization start", e))?;

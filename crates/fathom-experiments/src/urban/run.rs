@@ -26,10 +26,7 @@ use fathom_sim::SimError;
 
 /// The initial estimation error drawn from `P0` (position, velocity, attitude; the
 /// bias estimate starts at zero).
-pub(super) fn initial_error(
-    prep: &Prepared,
-    rng: &mut ChaCha8Rng,
-) -> Result<ErrorVector12, SimError> {
+pub fn initial_error(prep: &Prepared, rng: &mut ChaCha8Rng) -> Result<ErrorVector12, SimError> {
     let l = prep
         .checked
         .filter
@@ -47,11 +44,7 @@ pub(super) fn initial_error(
 }
 
 /// The navigation environment of a scenario.
-pub(super) fn nav_env<'a>(
-    prep: &'a Prepared,
-    scene: &'a PreparedScene,
-    ranging: Ranging,
-) -> NavEnv<'a> {
+pub fn nav_env<'a>(prep: &'a Prepared, scene: &'a PreparedScene, ranging: Ranging) -> NavEnv<'a> {
     let c = &prep.checked;
     let sensor_steps = match ranging {
         Ranging::Lidar => c.steps.lidar,
@@ -99,13 +92,18 @@ fn sample_truth(
 }
 
 /// A scenario flown on the truth: the samples and the sensor data since each.
-struct Flown {
-    truth: Vec<LocalTruthSample>,
+pub struct Flown {
+    /// The truth at the IMU rate, sample 0 first.
+    pub truth: Vec<LocalTruthSample>,
     /// `epochs[j - 1]`: the data of sample `j`.
-    epochs: Vec<SensorEpoch>,
+    pub epochs: Vec<SensorEpoch>,
 }
 
-fn fly_and_sense(
+/// Flies a scenario on the truth and simulates its sensors (the run's streams).
+///
+/// # Errors
+/// A flight or truth the models refuse.
+pub fn fly_and_sense(
     prep: &Prepared,
     scene: &PreparedScene,
     ranging: Ranging,

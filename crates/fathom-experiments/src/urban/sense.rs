@@ -66,6 +66,9 @@ pub struct RangeEpoch {
     pub returns: Vec<BeamReturn>,
     /// Baro height above the NED origin as the filter converts it.
     pub baro: BaroHeight,
+    /// The static pressure the barometer read, Pa (what a processor-in-the-loop
+    /// link carries; `baro` is its conversion).
+    pub pressure_pa: f64,
 }
 
 /// What the sensors give at one IMU sample (after the first).
@@ -258,6 +261,7 @@ impl<'a> Sensing<'a> {
                 height_m: baro_height(baro, p),
                 sigma_m: baro.filter_sigma,
             },
+            pressure_pa: p,
         }
     }
 }

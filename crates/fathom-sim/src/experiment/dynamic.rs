@@ -635,6 +635,29 @@ impl<E: Experiment> DynExperiment for E {
     }
 }
 
+/// Reads, checks (cost limits included) and prepares the scenario `text` of the typed
+/// experiment `exp` exactly as `fathom run` does, and returns what its runs share:
+/// for a front end that drives the experiment's own simulation in another way (the
+/// processor-in-the-loop flies one run of `urban` through two processes).
+///
+/// # Errors
+/// The scenario's errors, as `fathom run` reports them (usage errors name the key).
+pub fn prepare_typed<E: Experiment>(
+    exp: &E,
+    text: &str,
+    file: &str,
+    env: &Environment,
+) -> Result<(E::Prepared, Resolved), SimError> {
+    let (scenario, checked, resolved) =
+        read_checked(exp, ScenarioDoc::parse(text, file)?, None, None)?;
+    cost_of(exp, &scenario, None).check(&env.limits, file)?;
+    let prepared = exp.prepare(checked, env).map_err(|e| match e {
+        e if e.is_user_error() => e,
+        e => SimError::Input(Box::new(e)),
+    })?;
+    Ok((prepared, resolved))
+}
+
 /// A typed job prepared: what its runs share and its batches.
 struct Ready<'j, E: Experiment> {
     exp: E,

@@ -48,7 +48,7 @@ use crate::cost::{CostTerm, Limits};
 pub use analysis::{Analysis, ColumnValues, FileContent, OutputFile};
 pub use dynamic::{
     Assessed, DynExperiment, Executed, FoundRecord, Job, Plan, RecordSink, RecordSource, Resolved,
-    Shard, SingleRunFn, check_overrides,
+    Shard, SingleRunFn, check_overrides, prepare_typed,
 };
 pub use rows::{equivalence_claim, row_of_summary};
 
