@@ -153,6 +153,13 @@ pub fn encode_epoch(e: &Epoch, frame: &LocalFrame, wire: &RangeWire) -> Vec<MavM
         | HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_XGYRO
         | HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_YGYRO
         | HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_ZGYRO;
+    let mut mag = [0f32; 3];
+    if let Some(m) = e.mag_body_gauss {
+        flags |= HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_XMAG
+            | HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_YMAG
+            | HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_ZMAG;
+        mag = [to_f32(m.x), to_f32(m.y), to_f32(m.z)];
+    }
     let mut pressure = 0.0;
     if let Some(p) = e.pressure_pa {
         flags |= HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_ABS_PRESSURE;
@@ -166,9 +173,9 @@ pub fn encode_epoch(e: &Epoch, frame: &LocalFrame, wire: &RangeWire) -> Vec<MavM
         xgyro: to_f32(gyro.x),
         ygyro: to_f32(gyro.y),
         zgyro: to_f32(gyro.z),
-        xmag: 0.0,
-        ymag: 0.0,
-        zmag: 0.0,
+        xmag: mag[0],
+        ymag: mag[1],
+        zmag: mag[2],
         abs_pressure: pressure,
         diff_pressure: 0.0,
         pressure_alt: 0.0,
@@ -335,6 +342,8 @@ pub struct ImuReading {
     pub accel: Vector3<f64>,
     /// Static pressure, Pa.
     pub pressure_pa: Option<f64>,
+    /// Magnetic field, body, gauss.
+    pub mag_body_gauss: Option<Vector3<f64>>,
 }
 
 /// Decodes a `HIL_SENSOR`.
@@ -343,11 +352,18 @@ pub fn decode_imu(d: &HIL_SENSOR_DATA) -> ImuReading {
         .fields_updated
         .contains(HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_ABS_PRESSURE)
         .then(|| f64::from(d.abs_pressure) * 100.0);
+    let mag = HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_XMAG
+        | HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_YMAG
+        | HilSensorUpdatedFlags::HIL_SENSOR_UPDATED_ZMAG;
     ImuReading {
         time_usec: d.time_usec,
         gyro: Vector3::new(d.xgyro.into(), d.ygyro.into(), d.zgyro.into()),
         accel: Vector3::new(d.xacc.into(), d.yacc.into(), d.zacc.into()),
         pressure_pa: p,
+        mag_body_gauss: d
+            .fields_updated
+            .contains(mag)
+            .then(|| Vector3::new(d.xmag.into(), d.ymag.into(), d.zmag.into())),
     }
 }
 
@@ -369,6 +385,7 @@ pub fn epoch_from_parts(
         delta_theta: imu.gyro * dt,
         delta_v: imu.accel * dt,
         pressure_pa: imu.pressure_pa,
+        mag_body_gauss: imu.mag_body_gauss,
         gps,
         raw_gnss,
         ranges,

@@ -57,6 +57,9 @@ pub struct Epoch {
     pub delta_v: Vector3<f64>,
     /// Static pressure, Pa, when the barometer was read at this instant.
     pub pressure_pa: Option<f64>,
+    /// Magnetic field in the body frame, gauss (noise free, from a field model; for
+    /// a ground station or an autopilot: fathom's methods do not use it).
+    pub mag_body_gauss: Option<Vector3<f64>>,
     /// GNSS outputs at this instant.
     pub gps: Vec<GpsReading>,
     /// Raw GNSS measurements at this instant (every satellite above the mask), for a

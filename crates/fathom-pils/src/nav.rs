@@ -20,7 +20,7 @@ use crate::epoch::Solution;
 use crate::frame::{NAV_SYSTEM, SIM_SYSTEM};
 use crate::link::{Link, LinkSetup, Peer};
 use crate::settings::{Pacing, Settings};
-use crate::sim::heartbeat;
+use crate::sim::{HEARTBEAT_EVERY, heartbeat};
 use crate::source::{IMU_DT, Navigator};
 use crate::stats::Drop;
 
@@ -141,6 +141,10 @@ fn serve(
             }
             continue;
         }
+        // The simulator's clock, for a ground station.
+        if matches!(m, MavMessage::SYSTEM_TIME(_)) {
+            continue;
+        }
         let name = crate::frame::name_of(&m);
         if let MavMessage::STATUSTEXT(d) = &m {
             match (crate::identity::decode(d), &sh.identity) {
@@ -245,6 +249,9 @@ fn serve(
             out.steps += 1;
             let a = answer(k, sol.as_ref());
             link.send(&a)?;
+            if k.is_multiple_of(HEARTBEAT_EVERY) {
+                link.send(&heartbeat(MavState::MAV_STATE_ACTIVE))?;
+            }
             last_answer = Some((k, a));
             if let Some(sol) = sol {
                 started = true;

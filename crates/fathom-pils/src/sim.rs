@@ -11,7 +11,7 @@ use std::net::SocketAddr;
 use std::time::{Duration, Instant};
 
 use mavlink::dialects::common::{
-    HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType,
+    HEARTBEAT_DATA, MavAutopilot, MavMessage, MavModeFlag, MavState, MavType, SYSTEM_TIME_DATA,
 };
 
 use crate::PilsError;
@@ -93,8 +93,28 @@ pub fn run_sim(link: &mut Link, sh: &Schedule, src: &dyn SensorSource, s: &Setti
     out
 }
 
+/// Steps between two `HEARTBEAT`s (and the simulator's `SYSTEM_TIME`): 1 s.
+pub const HEARTBEAT_EVERY: u64 = 100;
+
+/// The simulator's `SYSTEM_TIME` at step `k`: the wall clock (0 if unknown) and the
+/// simulated time since the start as the boot time.
+fn system_time(k: u64) -> MavMessage {
+    let unix_usec = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| u64::try_from(d.as_micros()).unwrap_or(0));
+    MavMessage::SYSTEM_TIME(SYSTEM_TIME_DATA {
+        time_unix_usec: unix_usec,
+        time_boot_ms: u32::try_from(time_to_usec(k as f64 * IMU_DT) / 1000).unwrap_or(u32::MAX),
+    })
+}
+
 fn step_messages(sh: &Schedule, src: &dyn SensorSource, k: u64) -> Vec<MavMessage> {
     let mut v = Vec::new();
+    // A standard node: a heartbeat and the clock every second.
+    if k.is_multiple_of(HEARTBEAT_EVERY) {
+        v.push(heartbeat(MavState::MAV_STATE_ACTIVE));
+        v.push(system_time(k));
+    }
     // What is flown, with every step of the rest (a copy may be lost).
     if let Some(id) = &sh.identity
         && k <= sh.start

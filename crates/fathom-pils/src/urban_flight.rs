@@ -30,10 +30,13 @@ use fathom_experiments::urban::sense::{
 use fathom_experiments::urban::world::Prepared;
 use fathom_ins::ImuIncrement;
 use fathom_ins::local_level::LocalTruthSample;
+use fathom_sensors::gnss::geodesy::geodetic_from_ecef;
 use fathom_sensors::gnss::solve_spp;
+use fathom_sensors::magnetic::{Dipole, field_in_body};
 use fathom_sensors::map_range::RangeSensor;
 use fathom_sim::experiment::{Environment, prepare_typed};
 use fathom_sim::montecarlo::run_rng;
+use nalgebra::Vector3;
 use rand_chacha::ChaCha8Rng;
 use sha2::{Digest, Sha256};
 
@@ -252,11 +255,12 @@ impl UrbanRun {
             &streams,
         )
         .map_err(|e| model("urban flight", e))?;
+        let field = site_field_gauss(&fl.schedule.frame);
         let epochs = flown
             .epochs
             .iter()
             .enumerate()
-            .map(|(i, e)| to_wire(fl, i as u64 + 1, flown.truth[i + 1].time, e))
+            .map(|(i, e)| to_wire(fl, i as u64 + 1, &flown.truth[i + 1], &field, e))
             .collect();
         let start = fl.schedule.start as usize;
         let Some(at_start) = flown.truth.get(start) else {
@@ -307,8 +311,22 @@ impl SensorSource for UrbanRun {
     }
 }
 
-/// The wire form of step `k`'s sensor epoch at time `t`.
-fn to_wire(fl: &UrbanFlight, k: u64, t: f64, e: &SensorEpoch) -> Epoch {
+/// The magnetic field at the frame's origin (IGRF-13 dipole), NED, gauss.
+fn site_field_gauss(frame: &fathom_sensors::gnss::LocalFrame) -> Vector3<f64> {
+    let (lat, lon, h) = geodetic_from_ecef(&frame.origin_ecef());
+    Dipole::IGRF13_2020.field_ned_nt(lat, lon, h) * 1e-5
+}
+
+/// The wire form of step `k`'s sensor epoch, with the truth at its end (for the
+/// magnetometer) and the site's field (NED, gauss).
+fn to_wire(
+    fl: &UrbanFlight,
+    k: u64,
+    truth: &LocalTruthSample,
+    field_nav_gauss: &Vector3<f64>,
+    e: &SensorEpoch,
+) -> Epoch {
+    let t = truth.time;
     let frame = &fl.schedule.frame;
     let (gps, raw_gnss) = match &e.gnss {
         Some(g) => {
@@ -358,6 +376,7 @@ fn to_wire(fl: &UrbanFlight, k: u64, t: f64, e: &SensorEpoch) -> Epoch {
         delta_theta: e.imu.delta_theta,
         delta_v: e.imu.delta_v,
         pressure_pa: e.ranges.as_ref().map(|r| r.pressure_pa),
+        mag_body_gauss: Some(field_in_body(&truth.nav_from_body, field_nav_gauss)),
         gps,
         raw_gnss,
         ranges,

@@ -59,6 +59,7 @@ pub mod error;
 pub mod gnss;
 pub mod inertial;
 pub mod integrated;
+pub mod magnetic;
 pub mod map_range;
 pub mod models;
 pub mod noise;

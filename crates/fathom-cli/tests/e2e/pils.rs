@@ -593,29 +593,76 @@ fn bad_flags_and_empty_passphrase_are_refused_before_the_run() {
     assert!(dir.join("offline/solutions.csv").is_file());
 }
 
-/// The acceptance run itself: the full `buildings` MGPMF flight of the `urban` preset
-/// through `scenarios/pils.toml` in lockstep as two processes equals the offline run
-/// fed the same MAVLink-quantized measurements, bit for bit.
+/// The acceptance run itself: both full flights of the `urban` preset with every
+/// method, each through `fathom pils scenarios/urban.toml --scene S --method M` in
+/// lockstep as two processes, equal the offline run fed the same MAVLink-quantized
+/// measurements bit for bit; and `scenarios/pils.toml` (buildings, MGPMF) flies the
+/// same session as the preset file with those flags. About 30 s in all.
 #[test]
-fn full_buildings_flight_lockstep_equals_offline_quantized_run() {
-    let dir = pils_dir("pils-full");
+fn every_method_of_both_full_presets_lockstep_equals_offline_quantized_run() {
+    let dir = scratch("pils-full");
+    let urban = crate::support::repo_root().join("scenarios/urban.toml");
+    let urban = urban.to_str().unwrap();
+    for scene in ["bridge", "buildings"] {
+        for method in [
+            "INS-only",
+            "GPS/INS",
+            "GPS/INS-all-sats",
+            "GREKF",
+            "MGPMF",
+            "PF",
+        ] {
+            let out = format!("{scene}-{}", method.replace('/', "_"));
+            let r = fathom(
+                &dir,
+                &[
+                    "pils", urban, "--scene", scene, "--method", method, "--out", &out,
+                ],
+            );
+            assert_eq!(r.code, 0, "{scene}/{method}: {}{}", r.stdout, r.stderr);
+            let sim = json(&dir.join(&out).join("sim/pils.json"));
+            assert_eq!(sim["status"], "ok", "{scene}/{method}");
+            assert_eq!(sim["equal_to_offline_quantized"], true, "{scene}/{method}");
+            assert_eq!(sim["steps_sent"], sim["steps_total"]);
+            assert_eq!(
+                (sim["scenario"].as_str(), sim["method"].as_str()),
+                (Some(scene), Some(method))
+            );
+            assert!(
+                sim["steps_total"].as_u64().unwrap() > 10_000,
+                "{scene}/{method}: {}",
+                sim["steps_total"]
+            );
+            // Independently of the session's own comparison: the offline command.
+            let csv = std::fs::read_to_string(dir.join(&out).join("sim/solutions.csv")).unwrap();
+            let r = fathom(
+                &dir,
+                &[
+                    "pils",
+                    "offline",
+                    urban,
+                    "--scene",
+                    scene,
+                    "--method",
+                    method,
+                    "--quantized",
+                    "--out",
+                    "q",
+                ],
+            );
+            assert_eq!(r.code, 0, "{}", r.stderr);
+            let offline = std::fs::read_to_string(dir.join("q/solutions.csv")).unwrap();
+            assert!(
+                csv == offline,
+                "{scene}/{method}: PILS != offline quantized"
+            );
+        }
+    }
     let file = crate::support::repo_root().join("scenarios/pils.toml");
-    let file = file.to_str().unwrap();
-    let r = fathom(&dir, &["pils", file, "--out", "out"]);
+    let r = fathom(&dir, &["pils", file.to_str().unwrap(), "--out", "preset"]);
     assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
-    let sim = json(&dir.join("out/sim/pils.json"));
-    assert_eq!(sim["status"], "ok");
-    assert_eq!(sim["equal_to_offline_quantized"], true);
-    assert_eq!(sim["steps_sent"], sim["steps_total"]);
     assert_eq!(
-        (sim["scenario"].as_str(), sim["method"].as_str()),
-        (Some("buildings"), Some("MGPMF"))
+        std::fs::read_to_string(dir.join("preset/sim/solutions.csv")).unwrap(),
+        std::fs::read_to_string(dir.join("buildings-MGPMF/sim/solutions.csv")).unwrap()
     );
-    assert!(
-        sim["steps_total"].as_u64().unwrap() > 10_000,
-        "{}",
-        sim["steps_total"]
-    );
-    let csv = std::fs::read_to_string(dir.join("out/sim/solutions.csv")).unwrap();
-    assert_eq!(csv, offline_quantized(&dir, file));
 }
