@@ -56,7 +56,47 @@ pub fn session_figures(series: &SimSeries) -> Result<Vec<(&'static str, String)>
         .filter(|v| v.is_finite())
         .collect();
     out.extend(latency_histogram(&ms, "solution latency", "latency.svg")?);
+    out.extend(latency_tail(
+        &ms,
+        "solution latency tail",
+        "latency_tail.svg",
+    )?);
     Ok(out)
+}
+
+/// `(x, log10 P(latency > x))` at each finite latency `x` but the largest:
+/// `P(latency > x_(i)) = (n - 1 - i) / n` for the sorted `x_(0..n)`.
+fn latency_points(ms: &[f64]) -> Vec<(f64, f64)> {
+    let mut sorted: Vec<f64> = ms.iter().copied().filter(|v| v.is_finite()).collect();
+    sorted.sort_by(f64::total_cmp);
+    let n = sorted.len() as f64;
+    sorted
+        .iter()
+        .enumerate()
+        .take(sorted.len().saturating_sub(1))
+        .map(|(i, &x)| (x, ((n - 1.0 - i as f64) / n).log10()))
+        .collect()
+}
+
+/// The tail of the latencies `ms` as the file `name`: the fraction of solutions later
+/// than `x`, on a log10 axis (the histogram hides the rare long ones); nothing for
+/// none.
+fn latency_tail(
+    ms: &[f64],
+    title: &str,
+    name: &'static str,
+) -> Result<Option<(&'static str, String)>, PilsError> {
+    let pts = latency_points(ms);
+    if pts.is_empty() {
+        return Ok(None);
+    }
+    let plot = LinePlot::new(
+        format!("{title} ({} solutions)", pts.len() + 1),
+        "latency x (ms)",
+        "log10 fraction of solutions later than x",
+    )
+    .with_series(Series::new("latency", pts));
+    svg(name, &plot).map(Some)
 }
 
 /// The histogram of the latencies `ms` as the file `name` (nothing for none).
@@ -138,6 +178,11 @@ pub fn study_figures(
         "realtime solution latency, all runs",
         "latency_realtime.svg",
     )?);
+    out.extend(latency_tail(
+        latencies_ms,
+        "realtime solution latency tail, all runs",
+        "latency_tail_realtime.svg",
+    )?);
     Ok(out)
 }
 
@@ -161,7 +206,10 @@ mod tests {
             latencies_s: vec![0.001, 0.002, f64::NAN, 0.0015],
         };
         let files = session_figures(&series).unwrap();
-        assert_eq!(names(&files), ["error_3d.svg", "latency.svg"]);
+        assert_eq!(
+            names(&files),
+            ["error_3d.svg", "latency.svg", "latency_tail.svg"]
+        );
         assert!(
             files.iter().all(|f| f.1.starts_with("<svg")),
             "{}",
@@ -180,10 +228,24 @@ mod tests {
                 "rmse_h_per_run.svg",
                 "rmse_yaw_per_run.svg",
                 "error_3d_lockstep_vs_realtime.svg",
-                "latency_realtime.svg"
+                "latency_realtime.svg",
+                "latency_tail_realtime.svg"
             ]
         );
         assert!(files[3].1.contains("run 4"));
+        // The tail: 2 of 3 later than 20 ms, 1 of 3 later than 25 ms (log10 -0.18,
+        // -0.48); the last has no logarithm.
+        let points = latency_points(&[40.0, 20.0, 25.0]);
+        assert_eq!(points.len(), 2);
+        assert!(
+            (points[0].0 - 20.0).abs() < 1e-12
+                && (points[0].1 - (2.0f64 / 3.0).log10()).abs() < 1e-12
+        );
+        assert!(
+            (points[1].0 - 25.0).abs() < 1e-12
+                && (points[1].1 - (1.0f64 / 3.0).log10()).abs() < 1e-12
+        );
+        assert!(latency_points(&[5.0]).is_empty());
         assert_eq!(study_figures(&c, &[], &[]).unwrap().len(), 3);
     }
 }

@@ -161,7 +161,10 @@ fn epochs_carry_the_site_field_in_the_body_frame() {
         let e = SensorSource::epoch(&run, k);
         let truth = SensorSource::truth(&run, k);
         let mag = e.mag_body_gauss.unwrap();
-        assert!((truth.nav_from_body * mag - field).norm() < 1e-12, "step {k}");
+        assert!(
+            (truth.nav_from_body * mag - field).norm() < 1e-12,
+            "step {k}"
+        );
         let msgs = crate::codec::encode_epoch(e, &fl.schedule.frame, &fl.schedule.wire);
         let Some(mavlink::dialects::common::MavMessage::HIL_SENSOR(d)) = msgs.last() else {
             panic!("HIL_SENSOR closes the step")

@@ -211,6 +211,48 @@ fn setup(dir: &Path) {
     std::fs::write(dir.join("empty.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n").unwrap();
 }
 
+/// A user's OBJ world flown through processor-in-the-loop (`fathom pils FILE`, two
+/// processes, lockstep) with every method: each session equals the offline run fed
+/// the same MAVLink-quantized measurements, byte for byte.
+#[test]
+fn user_obj_world_flies_through_pils_equal_to_offline_quantized() {
+    let dir = scratch("urban-obj-pils");
+    setup(&dir);
+    std::fs::write(dir.join("u.toml"), block("block.obj", GOOD_PATH)).unwrap();
+    for method in METHODS {
+        let out = method.replace('/', "_");
+        let r = fathom(&dir, &["pils", "u.toml", "--method", method, "--out", &out]);
+        assert_eq!(r.code, 0, "{method}: {}{}", r.stdout, r.stderr);
+        let sim: serde_json::Value =
+            serde_json::from_str(&read(&dir, &format!("{out}/sim/pils.json"))).unwrap();
+        assert_eq!(sim["equal_to_offline_quantized"], true, "{method}");
+        assert_eq!(
+            (sim["scenario"].as_str(), sim["method"].as_str()),
+            (Some("block"), Some(method))
+        );
+        let q = format!("{out}-q");
+        let r = fathom(
+            &dir,
+            &[
+                "pils",
+                "offline",
+                "u.toml",
+                "--method",
+                method,
+                "--quantized",
+                "--out",
+                &q,
+            ],
+        );
+        assert_eq!(r.code, 0, "{method}: {}", r.stderr);
+        assert!(
+            read(&dir, &format!("{out}/sim/solutions.csv"))
+                == read(&dir, &format!("{q}/solutions.csv")),
+            "{method}: PILS != offline quantized"
+        );
+    }
+}
+
 /// A user's OBJ world and a three-waypoint path run end to end; the summary is
 /// byte-identical for 1 and 2 threads, and another seed changes it.
 #[test]
