@@ -27,13 +27,15 @@ const IO_EXCEPTIONS: [(&str, &str, &str); 1] = [(
     "FATHOM_SIMD=baseline keeps the SSE2 kernels (ARCHITECTURE.md, external crates: pulp)",
 )];
 
-/// Crates whose sources may do I/O: the experiment layer and the binaries.
-const IO_CRATES: [&str; 8] = [
+/// Crates whose sources may do I/O: the experiment layer (and `fathom-pils` above
+/// it, which reads its settings and the `urban` file they name) and the binaries.
+const IO_CRATES: [&str; 9] = [
     "fathom-report",
     "fathom-data",
     "fathom-sim",
     "fathom-replay",
     "fathom-experiments",
+    "fathom-pils",
     "fathom-cli",
     "fathom-py",
     "xtask",
