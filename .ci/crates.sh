@@ -8,7 +8,9 @@
 #   2. `cargo package --list` of each crate ships its README and licence files;
 #   3. the library crates' API docs build with warnings as errors;
 #   4. a scratch project outside the workspace that depends on `fathom-estimators`
-#      alone (by path) builds and runs that crate's README example.
+#      alone (by path) builds and runs that crate's README example; its dependency
+#      tree has no other fathom library, and none of serde or rand without the
+#      default features.
 #
 # Cheap by construction: the same target directory and the `test` profile as the main
 # `cargo test --workspace`, so most dependencies are already built; the scratch project
@@ -99,8 +101,20 @@ awk '/^```rust$/ {inside = 1; next} inside && /^```$/ {exit} inside {print}' \
   crates/fathom-estimators/README.md >"$scratch/src/main.rs"
 grep -q '^fn main' "$scratch/src/main.rs"
 (cd "$scratch" && timed cargo run -q --profile test)
-if (cd "$scratch" && cargo tree -e normal --prefix none | grep -Eq '^fathom-(sensors|traj|map|sim|ins|stats) '); then
-  echo "the scratch project pulls in a fathom crate fathom-estimators must not need" >&2
+if (cd "$scratch" && cargo tree -e normal --prefix none | grep -E '^fathom-(sensors|traj|map|sim|ins|stats) '); then
+  echo "the scratch project pulls in a fathom crate that fathom-estimators must not need" >&2
+  exit 1
+fi
+# Without its default features the Kalman core needs no serde and no rand (checked on
+# the dependency tree only: building that variant rebuilds faer without serde, ~3 min).
+minimal_tree="$(cargo tree -e normal --prefix none -p fathom-estimators --no-default-features)"
+if grep -E '^(serde|rand|rand_distr) ' <<<"$minimal_tree"; then
+  echo "fathom-estimators without default features still depends on serde or rand" >&2
+  exit 1
+fi
+core_tree="$(cargo tree -e normal --prefix none -p fathom-core)"
+if grep -E '^serde ' <<<"$core_tree"; then
+  echo "fathom-core depends on serde without its serde feature" >&2
   exit 1
 fi
 echo "   the README example of fathom-estimators ran in a project of its own"
