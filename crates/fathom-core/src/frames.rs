@@ -2,12 +2,12 @@
 //! rotation helpers named after the frames they map between.
 
 use nalgebra::{Matrix3, Rotation3, Vector3};
-use serde::{Deserialize, Serialize};
 
 /// Roll, pitch, yaw (phi, theta, psi) in radians, ZYX order: the body frame is
 /// reached from NED by yawing about z, then pitching about the new y, then
 /// rolling about the new x.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Euler {
     /// Roll phi, rad.
     pub roll: f64,

@@ -24,6 +24,11 @@
 //! assert_eq!(g.mean()[1], 2.0);
 //! assert!(Gaussian::new(Vector2::zeros(), Matrix2::new(1.0, 2.0, 2.0, 1.0)).is_err());
 //! ```
+//!
+//! ---
+//!
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
 
 pub mod echo;
 pub mod error;

@@ -1,12 +1,11 @@
 //! Stamped measurement records: which sensor, when it was sampled, when it says it
 //! was sampled, what it read and what it would have read without noise.
 
-use serde::{Deserialize, Serialize};
-
 use crate::Time;
 
 /// Identifies the sensor a measurement came from.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 #[non_exhaustive]
 pub enum SensorId {
     /// Doppler velocity log (body velocity).
@@ -44,7 +43,8 @@ impl std::fmt::Display for SensorId {
 /// `sample_time` is when the sensor actually sampled; `stamp` is the time it
 /// reports (differs when a time-stamp error is simulated). `value` is the noisy
 /// reading and `true_value` the noise-free one, so the noise can be verified.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct Measurement<T> {
     /// The sensor that produced it.
     pub sensor: SensorId,

@@ -19,7 +19,6 @@
 //! - The closest hit wins; ties at exactly equal range go to the lower triangle index.
 
 use nalgebra::Vector3;
-use serde::{Deserialize, Serialize};
 
 /// Hits at or below this range (m) are ignored: a ray that starts on a surface
 /// (a beam leaving a wall, a receiver on a roof) does not hit that surface.
@@ -31,8 +30,9 @@ pub const MIN_RANGE: f64 = 1e-9;
 /// noise, returns only near normal incidence); `Other(id)` keeps further materials
 /// of a map apart (concrete, steel, ...) for the analysis, with the behaviour of
 /// `Opaque` in the sensors.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
+#[cfg_attr(feature = "serde", serde(rename_all = "snake_case"))]
 pub enum Material {
     /// An opaque, diffusely reflecting surface (concrete, stone, ground).
     Opaque,

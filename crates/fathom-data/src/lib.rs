@@ -13,6 +13,11 @@
 //!
 //! Every error names the file and, for text files, the 1-based line (for `.mat`
 //! matrices, the matrix and its 1-based row; for the CSV layout also the column).
+//!
+//! ---
+//!
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
 
 pub mod layout;
 pub mod matv5;

@@ -92,6 +92,11 @@
 //! Allocation: the fixed-size path (`predict*`, `update*` with `const M`) does not
 //! allocate except to build an error. The sequential update allocates its report; the
 //! stacked update allocates faer/nalgebra dynamic matrices.
+//!
+//! ---
+//!
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
 
 pub mod architectures;
 pub mod beacon_ekf;

@@ -4,7 +4,7 @@
 //! step ([`crate::KalmanFilter::update_with_noise`],
 //! [`crate::KalmanFilter::predict_with_noise`]); and the one `Q` check that
 //! [`ProcessNoise`], the fixed-size [`crate::KalmanFilter`] and the run-time-size
-//! [`crate::DynKalmanFilter`] all run ([`check_process_noise`]).
+//! [`crate::DynKalmanFilter`] all run (`check_process_noise`).
 
 use crate::{EstimatorError, error::check_finite};
 use fathom_core::Time;

@@ -72,7 +72,8 @@ use fathom_core::{CoreError, Time, gaussian::SYMMETRY_TOLERANCE};
 use nalgebra::DMatrix;
 
 /// Which update scheme a [`SchemeFilter`] uses (module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum UpdateScheme {
     /// AS: every measurement at its own time stamp.
     Asynchronous,
@@ -250,7 +251,8 @@ impl<I, S> Event<I, S> {
 }
 
 /// What happened to a measurement.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub enum Disposition {
     /// Passed the gate and was applied.
     Accepted,
@@ -288,7 +290,8 @@ pub struct Decision {
 }
 
 /// Per-channel counts of the dispositions.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct ChannelCounts {
     /// Applied.
     pub accepted: usize,

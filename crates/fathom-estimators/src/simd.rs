@@ -3,7 +3,7 @@
 //! The crate is built for the default `x86-64` target (SSE2). `dispatch` runs a
 //! closure compiled a second time with AVX2 enabled (through `pulp`, which `faer`
 //! already uses) when the CPU has it, and hands the closure the instruction set
-//! ([`crate::lanes::Isa`]), so the `#[inline(always)]` kernels of `linalg` inlined
+//! (`lanes::Isa`, private), so the `#[inline(always)]` kernels of `linalg` inlined
 //! into it do their column chunks with 4-wide vectors (measured: the 6-state /
 //! 3-measurement step ~10 % faster, the 9 / 3 step ~15 %; explicit chunks another
 //! ~5 %, see `docs/performance.md`). Rust never fuses a

@@ -35,7 +35,8 @@ use fathom_core::units::wrap_pi;
 use nalgebra::{Matrix2, Matrix3x2, RowSVector, SMatrix, SVector, Vector2};
 
 /// Unchecked parameters of [`WheelOdometry`].
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, PartialEq)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct WheelOdometryParams {
     /// Distance error sigma per square root of distance driven, m/sqrt(m) (>= 0).
     pub distance_sigma_per_sqrt_m: f64,
@@ -95,7 +96,8 @@ impl WheelOdometry {
 }
 
 /// The odometry input held by the filter: speed and turn rate over the current step.
-#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+#[cfg_attr(feature = "serde", derive(serde::Serialize, serde::Deserialize))]
 pub struct OdometryRate {
     /// Speed along the heading, m/s.
     pub speed: f64,

@@ -26,6 +26,11 @@
 //! let err = fathom_ins::earth::curvilinear_offset(&pos, &ins.state().position());
 //! assert!(err.norm() < 1e-6, "position error {err} m");
 //! ```
+//!
+//! ---
+//!
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
 
 pub mod earth;
 pub mod error;

@@ -22,6 +22,11 @@
 //! assert!((hit.range - 20.0).abs() < 1e-9);
 //! assert_eq!(hit.material, Material::Opaque);
 //! ```
+//!
+//! ---
+//!
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
 
 pub mod brute;
 pub mod bvh;

@@ -9,8 +9,13 @@
 //! - [`outdir`]: the output folder that never loses work ([`OutDir`](outdir::OutDir):
 //!   claim before computing, atomic commit, `run_info.json`).
 //!
-//! The crate depends on `fathom-core` only: it draws and writes numbers that the
+//! The crate has no fathom dependency: it draws and writes numbers that the
 //! statistics and the experiments computed.
+//!
+//! ---
+//!
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
 
 pub mod csv_writer;
 pub mod error;

@@ -52,6 +52,11 @@
 //! depending on the map crate): [`map_range`] (range finders and the lidar), [`gnss`]
 //! (constellation, line of sight, pseudoranges, Doppler, single-point positioning,
 //! BESTPOS).
+//!
+//! ---
+//!
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
 
 pub mod allan_imu;
 pub mod barometer;

@@ -47,6 +47,11 @@
 //! assert!((bounds.hi - 129.5612 / 50.0).abs() < 1e-5 && bounds.contains(2.0));
 //! # Ok::<(), fathom_stats::StatsError>(())
 //! ```
+//!
+//! ---
+//!
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
 
 pub mod allan;
 pub mod bootstrap;

@@ -37,6 +37,11 @@
 //! // Out-of-range times are errors, not panics.
 //! assert!(motion.state_at(181.0).is_err());
 //! ```
+//!
+//! ---
+//!
+#![doc = include_str!("../README.md")]
+#![deny(missing_docs)]
 
 pub mod error;
 pub mod fusion_mission;

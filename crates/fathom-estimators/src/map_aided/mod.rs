@@ -58,6 +58,7 @@ pub mod likelihood;
 pub mod marginal;
 pub mod mgpmf;
 pub mod params;
+#[cfg(feature = "particle-filter")]
 pub mod particle;
 pub mod range_model;
 pub mod switching;
@@ -78,6 +79,7 @@ pub use params::{
     MgpmfParams, MgpmfSettings, ParticleKernel, ParticleParams, ParticleSettings, RangeParams,
     RangeSettings, SwitchParams, SwitchSettings,
 };
+#[cfg(feature = "particle-filter")]
 pub use particle::{ParticleFilter, ParticleReport};
 pub use range_model::{BaroHeight, BeamGeometry, RangeBeam};
 pub use switching::{MapAider, MapReport, ModeSwitch, NavMode, SwitchingFilter};
