@@ -78,16 +78,7 @@ fn lockstep_two_processes_equal_offline_quantized_run_despite_foreign_junk() {
         .unwrap()
         .local_addr()
         .unwrap();
-    let mut nav_child = Command::new(fathom_bin())
-        .args(["pils", "nav", "pils.toml", "--sim", &sim_addr.to_string()])
-        .args(["--out", "out/nav"])
-        .current_dir(&dir)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let nav = first_addr(&mut nav_child);
+    let (nav_child, nav) = spawn_nav(&dir, &["--sim", &sim_addr.to_string(), "--out", "out/nav"]);
     // Junk from another address: random bytes, a truncated and a complete-looking
     // MAVLink 2 frame. The navigation drops and counts all of it.
     let junk = UdpSocket::bind("127.0.0.1:0").unwrap();
@@ -245,22 +236,7 @@ fn separate_processes_with_different_methods_refuse_to_run() {
         settings("").replace("timeout_s = 3.0", "timeout_s = 1.0"),
     )
     .unwrap();
-    let mut nav = Command::new(fathom_bin())
-        .args([
-            "pils",
-            "nav",
-            "pils.toml",
-            "--method",
-            "MGPMF",
-            "--out",
-            "nav",
-        ])
-        .current_dir(&dir)
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let addr = first_addr(&mut nav);
+    let (nav, addr) = spawn_nav(&dir, &["--method", "MGPMF", "--out", "nav"]);
     let r = fathom(
         &dir,
         &[
@@ -285,6 +261,22 @@ fn separate_processes_with_different_methods_refuse_to_run() {
     let n = json(&dir.join("nav/nav.json"));
     assert_eq!(n["method"], "MGPMF");
     assert_eq!(n["solutions"], 0, "{n}");
+}
+
+/// `fathom pils nav pils.toml ARGS` in `dir` (stdout and stderr piped) and the
+/// address it listens on.
+fn spawn_nav(dir: &Path, args: &[&str]) -> (Child, SocketAddr) {
+    let mut nav = Command::new(fathom_bin())
+        .args(["pils", "nav", "pils.toml"])
+        .args(args)
+        .current_dir(dir)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let addr = first_addr(&mut nav);
+    (nav, addr)
 }
 
 /// The address a `fathom pils nav` prints on its first line.
@@ -604,14 +596,7 @@ fn every_method_of_both_full_presets_lockstep_equals_offline_quantized_run() {
     let urban = crate::support::repo_root().join("scenarios/urban.toml");
     let urban = urban.to_str().unwrap();
     for scene in ["bridge", "buildings"] {
-        for method in [
-            "INS-only",
-            "GPS/INS",
-            "GPS/INS-all-sats",
-            "GREKF",
-            "MGPMF",
-            "PF",
-        ] {
+        for method in crate::urban::METHODS {
             let out = format!("{scene}-{}", method.replace('/', "_"));
             let r = fathom(
                 &dir,

@@ -12,7 +12,8 @@ use crate::support::{fathom, preset, read, run_experiment, scratch, write_scenar
 /// The committed test world (east-north-up metres; one building beside the path).
 const BLOCK_OBJ: &str = "scenarios/worlds/urban_block.obj";
 
-const METHODS: [&str; 6] = [
+/// The preset's methods.
+pub(crate) const METHODS: [&str; 6] = [
     "INS-only",
     "GPS/INS",
     "GPS/INS-all-sats",
