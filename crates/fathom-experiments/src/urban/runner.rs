@@ -1,4 +1,4 @@
-//! One method stepped over a run's sensor epochs ([`Runner`]: gyro calibration over
+//! One method stepped over a run's sensor epochs (`Runner`: gyro calibration over
 //! the rest, the start of navigation, one IMU step and its sensor events at a time,
 //! the evaluation), shared by the truth-controlled run ([`super::run`]) and the
 //! control-on-estimate flight ([`super::closed_loop`]).
@@ -40,7 +40,7 @@ pub enum Fed {
 
 /// One method's navigation over a run's sensor epochs, without the truth: the gyro
 /// calibration over the rest, the start from an initial estimate at its end, then
-/// one step per sample. The offline runs ([`Runner`]) and the navigation process of
+/// one step per sample. The offline runs (`Runner`) and the navigation process of
 /// the processor-in-the-loop (`fathom-pils`) both run it.
 pub struct Navigation<'e> {
     env: &'e NavEnv<'e>,

@@ -1,6 +1,6 @@
 //! INS / DVL navigation replayed on a log in fathom's CSV layout (kind `ins-dvl`,
 //! [`fathom_data::layout::ins_dvl`]): the methods of the settings' `[[methods]]`
-//! list side by side in one pass ([`run`]).
+//! list side by side in one pass (`run`).
 //!
 //! Recording instants: every `truth.csv` row after the start (errors are then scored
 //! against it: the horizontal position, and the horizontal velocity when the truth
@@ -11,7 +11,7 @@
 //! what the report shows.
 //!
 //! [`InsDvl`] runs it as a job of the runner (`fathom replay ins-dvl DIR`): settings
-//! -> log -> replay ([`replay`], [`run`]) -> rows, checks and CSV files -> figures ->
+//! -> log -> replay ([`replay`], `run`) -> rows, checks and CSV files -> figures ->
 //! report notes, each step in its own file.
 
 mod analysis;
@@ -236,7 +236,7 @@ fn truth_not_covering() -> SimError {
 
 /// What [`replay`] refuses about `log` before it runs a filter (the user's log or
 /// settings, not a failing filter): nothing to record, or a `truth.csv` that starts
-/// after the first IMU row the filters are recorded after ([`run::run`]: the last IMU
+/// after the first IMU row the filters are recorded after (`run::run`: the last IMU
 /// row after the start at or before the first instant, else the start).
 ///
 /// # Errors

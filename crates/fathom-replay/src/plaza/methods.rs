@@ -51,7 +51,7 @@ pub struct MethodRun {
     pub downweighted: usize,
     /// Covariance inflations after runs of rejected or down-weighted ranges.
     pub recoveries: usize,
-    /// Per range of the log (index as in [`PlazaLog::ranges`]): the decision, if the
+    /// Per range of the log (index as in `PlazaLog::ranges`): the decision, if the
     /// range was processed.
     pub decisions: Vec<Option<Disposition>>,
     /// Every tested range in processing order, with its innovation and NIS (empty for

@@ -64,8 +64,9 @@ pub struct RangeBeaconToml {
 pub struct LogDirToml {
     /// The log folder (fathom's CSV layout, `docs/own-data.md`): an absolute path, or
     /// a relative one looked up inside the current directory (`cargo xtask paper`:
-    /// the workspace root), then beside each of its ancestors. `fathom replay <kind>
-    /// <dir>` replaces it with `<dir>`. A folder that is not found is an error.
+    /// the workspace root), then beside each of its ancestors.
+    /// `fathom replay <kind> <dir>` replaces it with `<dir>`. A folder that is not
+    /// found is an error.
     ///
     /// Range: a path.
     pub dir: String,
