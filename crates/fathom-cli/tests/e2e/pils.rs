@@ -95,19 +95,10 @@ fn lockstep_two_processes_equal_offline_quantized_run_despite_foreign_junk() {
             sent += 1;
         }
     }
-    let r = fathom(
+    let r = run_sim(
         &dir,
-        &[
-            "pils",
-            "sim",
-            "pils.toml",
-            "--nav",
-            &nav.to_string(),
-            "--bind",
-            &sim_addr.to_string(),
-            "--out",
-            "out/sim",
-        ],
+        nav,
+        &["--bind", &sim_addr.to_string(), "--out", "out/sim"],
     );
     assert_eq!(r.code, 0, "{}{}", r.stdout, r.stderr);
     let nav_out = nav_child.wait_with_output().unwrap();
@@ -199,18 +190,7 @@ fn lockstep_over_faulty_signed_link_is_unchanged_and_counts_everything() {
         .spawn()
         .unwrap();
     let addr = first_addr(&mut nav);
-    let r = fathom(
-        &dir,
-        &[
-            "pils",
-            "sim",
-            "pils.toml",
-            "--nav",
-            &addr.to_string(),
-            "--out",
-            "sim2",
-        ],
-    );
+    let r = run_sim(&dir, addr, &["--out", "sim2"]);
     assert_ne!(r.code, 0);
     assert!(r.stderr.contains("silent"), "{}", r.stderr);
     let _ = nav.wait();
@@ -237,18 +217,7 @@ fn separate_processes_with_different_methods_refuse_to_run() {
     )
     .unwrap();
     let (nav, addr) = spawn_nav(&dir, &["--method", "MGPMF", "--out", "nav"]);
-    let r = fathom(
-        &dir,
-        &[
-            "pils",
-            "sim",
-            "pils.toml",
-            "--nav",
-            &addr.to_string(),
-            "--out",
-            "sim",
-        ],
-    );
+    let r = run_sim(&dir, addr, &["--out", "sim"]);
     assert_ne!(r.code, 0, "{}", r.stderr);
     assert!(r.stderr.contains("silent"), "{}", r.stderr);
     let out = nav.wait_with_output().unwrap();
@@ -277,6 +246,14 @@ fn spawn_nav(dir: &Path, args: &[&str]) -> (Child, SocketAddr) {
         .unwrap();
     let addr = first_addr(&mut nav);
     (nav, addr)
+}
+
+/// `fathom pils sim pils.toml --nav NAV ARGS` in `dir`, to its end.
+fn run_sim(dir: &Path, nav: SocketAddr, args: &[&str]) -> crate::support::Ran {
+    let nav = nav.to_string();
+    let mut all = vec!["pils", "sim", "pils.toml", "--nav", &nav];
+    all.extend_from_slice(args);
+    fathom(dir, &all)
 }
 
 /// The address a `fathom pils nav` prints on its first line.

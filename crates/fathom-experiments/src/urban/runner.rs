@@ -103,40 +103,8 @@ impl<'e> Navigation<'e> {
         epoch: &SensorEpoch,
         init: Option<&NavStart>,
     ) -> Result<Fed, SimError> {
-        if self.nav.is_none() {
-            if j <= self.start {
-                self.gyro_sum += epoch.imu.delta_theta;
-                self.gyro_time += epoch.imu.dt;
-            }
-            if j < self.start {
-                return Ok(Fed::Calibrating);
-            }
-            let Some(init) = init else {
-                return Ok(Fed::Calibrating);
-            };
-            let gyro_bias = self.gyro_sum / self.gyro_time.max(1e-12);
-            let mode = match &epoch.gnss {
-                Some(g)
-                    if los_satellites(self.env, &init.pos_in_nav, g).1
-                        < self.env.filter.switch.leave_gps_below() =>
-                {
-                    NavMode::MapAided
-                }
-                Some(_) => NavMode::GpsIns,
-                None => NavMode::MapAided,
-            };
-            self.nav = Some(Nav::new(
-                self.method,
-                self.env,
-                init,
-                gyro_bias,
-                mode,
-                &self.particle_rng,
-            )?);
-            return Ok(Fed::Started);
-        }
         let Some(nav) = self.nav.as_mut() else {
-            return Ok(Fed::Calibrating);
+            return self.calibrate_or_start(j, epoch, init);
         };
         let map_updated = nav.step(
             self.env,
@@ -146,6 +114,43 @@ impl<'e> Navigation<'e> {
             epoch.ranges.as_ref(),
         )?;
         Ok(Fed::Stepped { map_updated })
+    }
+
+    /// Before the start: sample `j` into the gyro calibration (up to the start
+    /// sample), and the start from `init` at or after the start sample.
+    fn calibrate_or_start(
+        &mut self,
+        j: usize,
+        epoch: &SensorEpoch,
+        init: Option<&NavStart>,
+    ) -> Result<Fed, SimError> {
+        if j <= self.start {
+            self.gyro_sum += epoch.imu.delta_theta;
+            self.gyro_time += epoch.imu.dt;
+        }
+        let (true, Some(init)) = (j >= self.start, init) else {
+            return Ok(Fed::Calibrating);
+        };
+        let gyro_bias = self.gyro_sum / self.gyro_time.max(1e-12);
+        let mode = match &epoch.gnss {
+            Some(g)
+                if los_satellites(self.env, &init.pos_in_nav, g).1
+                    < self.env.filter.switch.leave_gps_below() =>
+            {
+                NavMode::MapAided
+            }
+            Some(_) => NavMode::GpsIns,
+            None => NavMode::MapAided,
+        };
+        self.nav = Some(Nav::new(
+            self.method,
+            self.env,
+            init,
+            gyro_bias,
+            mode,
+            &self.particle_rng,
+        )?);
+        Ok(Fed::Started)
     }
 
     /// The counters of the method.

@@ -442,12 +442,21 @@ fn prepare_with<E: Experiment>(
     job: &Job<'_>,
     checked: E::Checked,
 ) -> Result<(E::Prepared, Vec<Batch>), SimError> {
-    let prepared = exp.prepare(checked, &job.env).map_err(|e| match e {
-        e if e.is_user_error() => e,
-        e => SimError::Input(Box::new(e)),
-    })?;
+    let prepared = prepare_input(exp, checked, &job.env)?;
     let batches = exp.batches(&prepared);
     Ok((prepared, batches))
+}
+
+/// `exp.prepare`, its errors as the user's input unless they already are.
+fn prepare_input<E: Experiment>(
+    exp: &E,
+    checked: E::Checked,
+    env: &Environment,
+) -> Result<E::Prepared, SimError> {
+    exp.prepare(checked, env).map_err(|e| match e {
+        e if e.is_user_error() => e,
+        e => SimError::Input(Box::new(e)),
+    })
 }
 
 /// Runs the indices `range` of batch `b` in chunks (parallel within a chunk) and hands
@@ -651,11 +660,7 @@ pub fn prepare_typed<E: Experiment>(
     let (scenario, checked, resolved) =
         read_checked(exp, ScenarioDoc::parse(text, file)?, None, None)?;
     cost_of(exp, &scenario, None).check(&env.limits, file)?;
-    let prepared = exp.prepare(checked, env).map_err(|e| match e {
-        e if e.is_user_error() => e,
-        e => SimError::Input(Box::new(e)),
-    })?;
-    Ok((prepared, resolved))
+    Ok((prepare_input(exp, checked, env)?, resolved))
 }
 
 /// A typed job prepared: what its runs share and its batches.
