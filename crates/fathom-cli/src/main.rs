@@ -21,8 +21,8 @@
 //! `fathom-out/<kind>-log`, `log from-plaza` -> `fathom-out/plaza-log`, `pils` ->
 //! `fathom-out/pils`, `pils sim|nav|offline|compare` -> `fathom-out/pils-<side>`.
 //! A replay without `DIR` reads its settings' `[data] dir` (found in the current
-//! directory or beside one of its ancestors): `data/plaza1` for `plaza`,
-//! `fathom-out/<kind>-log` for one's own logs.
+//! directory or beside one of its ancestors): `data/plaza1` for `plaza`, the
+//! repository's example logs `data/logs/<kind>-example` for the own-log kinds.
 //!
 //! `run` runs any scenario file of a registered experiment (the file's top-level
 //! `experiment` key names it) and writes the experiment's outputs plus the scenario,
@@ -108,9 +108,9 @@ use anyhow::{Context, anyhow};
 use clap::{Args, Parser, Subcommand};
 use fathom_experiments::jobs;
 use fathom_sim::cost::Limits;
-use fathom_sim::driver::{console_claims, console_rows, console_setup};
-use fathom_sim::echo::echo_lines;
-use fathom_sim::experiment::Shard;
+use fathom_sim::driver::{console_claims, console_main_rows, console_setup};
+use fathom_sim::echo::{echo_lines, echo_path};
+use fathom_sim::experiment::{Extras, Shard};
 use fathom_sim::progress::{Progress, ProgressEvent};
 use fathom_sim::user_run::{
     RunOptions, assess_scenario, check_line, check_scenario_with, job_of, one_line, run_assessed,
@@ -201,6 +201,11 @@ struct RunArgs {
     force: bool,
     #[command(flatten)]
     limits: LimitArgs,
+    /// Also on a scenario that differs from the paper's setup: run the paper's
+    /// sensitivity batches (its beacon layouts, the literal-bias reading) and judge
+    /// its claims (by default only the paper's setup gets them).
+    #[arg(long, conflicts_with = "shard")]
+    paper_extras: bool,
     /// Run only shard K of M of every batch and write its records and manifest into
     /// `--out` (no analysis; `fathom merge` combines the shards).
     #[arg(long, value_name = "K/M", value_parser = parse_shard)]
@@ -277,20 +282,30 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         base_dir: crate::current_dir()?,
         force: args.force,
         limits,
+        extras: if args.paper_extras {
+            Extras::Always
+        } else {
+            Extras::WhenPaper
+        },
     };
     // Assessed once (scenario, overrides, cost against the limits) before anything
     // runs; the estimate is printed first. The bar stays hidden until a batch starts.
     let bar = progress_bar();
-    let job = job_of(&text, &label, &options, Some(run_hook(bar.clone())));
+    let job = job_of(&text, &label, &options, Some(run_hook(bar.clone(), false)));
     let (exp, assessed) = assess_scenario(&job, &registry).map_err(failure)?;
     let what = match (assessed.resolved.runs, assessed.resolved.base_seed) {
         (Some(n), Some(seed)) => format!("{n} runs, base seed {seed}"),
         _ => "one deterministic replay".to_string(),
     };
+    // The seed paper is named for its own setup; a variant is the user's scenario.
+    let source = if assessed.resolved.setup.is_paper() {
+        exp.seed_doc().to_string()
+    } else {
+        format!("your scenario {}", echo_path(&args.scenario))
+    };
     say(&format!(
-        "{} ({}): {what}; estimate: {}\n",
+        "{} ({source}): {what}; estimate: {}\n",
         exp.name(),
-        exp.seed_doc(),
         assessed.cost.summary()
     ));
     let outcome = run_assessed(exp, assessed, &job, &options);
@@ -304,7 +319,7 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         info.fathom_version
     );
     text.push_str(&console_setup(&result));
-    text.push_str(&console_rows(&result));
+    text.push_str(&console_main_rows(&result, exp.console_metrics()));
     text.push_str(&console_claims(&result));
     text.push_str(&format!(
         "outputs: {} ({} figures, report.md, summary.json)\n",
@@ -331,31 +346,73 @@ pub(crate) fn default_out(name: &str) -> PathBuf {
 }
 
 /// Prints `text` on standard output at once (also into a pipe).
-fn say(text: &str) {
+pub(crate) fn say(text: &str) {
     let mut out = std::io::stdout().lock();
     let _ = out.write_all(text.as_bytes());
     let _ = out.flush();
 }
 
+/// Progress lines per batch when no bar is drawn (a Slurm log, a pipe): one line per
+/// this fraction of the batch's runs.
+const LINES_PER_BATCH: usize = 10;
+
+/// What the hook of `fathom run` tracks across events.
+struct HookState {
+    batches_done: usize,
+    batch_start: Instant,
+    batch_runs: usize,
+    runs_done: usize,
+}
+
 /// The hook of `fathom run`: one line per finished Monte Carlo batch on standard
-/// output (printed above the progress bar, if one is drawn), and the bar.
-fn run_hook(bar: Option<ProgressBar>) -> Progress {
+/// output (printed above the progress bar, if one is drawn), and the bar. With
+/// `lines` and no bar, also a line every tenth of a batch's runs (a shard of 25,000
+/// runs in a Slurm log shows it is alive).
+fn run_hook(bar: Option<ProgressBar>, lines: bool) -> Progress {
     let bar_hook = bar.as_ref().map(|b| progress_hook(b, true));
-    // (batches finished, start of the current batch, its runs)
-    let state = Mutex::new((0usize, Instant::now(), 0usize));
+    let run_lines = lines && bar.is_none();
+    let state = Mutex::new(HookState {
+        batches_done: 0,
+        batch_start: Instant::now(),
+        batch_runs: 0,
+        runs_done: 0,
+    });
     Progress::new(move |event| {
         let line = match &event {
             ProgressEvent::BatchStarted { total, .. } => {
                 if let Ok(mut s) = state.lock() {
-                    s.1 = Instant::now();
-                    s.2 = *total;
+                    s.batch_start = Instant::now();
+                    s.batch_runs = *total;
+                    s.runs_done = 0;
                 }
                 None
             }
             ProgressEvent::BatchFinished { label } => state.lock().ok().map(|mut s| {
-                s.0 += 1;
-                batch_line(s.0, label, s.2, s.1.elapsed().as_secs_f64())
+                s.batches_done += 1;
+                batch_line(
+                    s.batches_done,
+                    label,
+                    s.batch_runs,
+                    s.batch_start.elapsed().as_secs_f64(),
+                )
             }),
+            ProgressEvent::RunFinished { .. } if run_lines => {
+                state.lock().ok().and_then(|mut s| {
+                    s.runs_done += 1;
+                    let step = s.batch_runs.div_ceil(LINES_PER_BATCH).max(1);
+                    (s.runs_done % step == 0 && s.runs_done < s.batch_runs).then(|| {
+                        let secs = s.batch_start.elapsed().as_secs_f64();
+                        let left = secs / s.runs_done as f64 * (s.batch_runs - s.runs_done) as f64;
+                        format!(
+                            "    {}/{} runs of batch {}, {secs:.1} s, about {} left\n",
+                            s.runs_done,
+                            s.batch_runs,
+                            s.batches_done + 1,
+                            fathom_sim::cost::duration(left)
+                        )
+                    })
+                })
+            }
             ProgressEvent::RunFinished { .. } => None,
         };
         if let Some(h) = &bar_hook {

@@ -31,7 +31,7 @@ fn a_variant_names_exactly_the_keys_it_changes() {
         .replace("outlier_count = 276", "outlier_count = 200")
         .replacen("[15.0, 15.0, 0.0], [-15.0", "[15.0, 15.0, 0.0], [-16.0", 1);
     let r = beacons.resolve(&text, "v", None, None).unwrap();
-    let setup = Setup::of(*beacons, &r.toml);
+    let setup = r.setup.clone();
     assert_eq!(
         setup,
         Setup::Variant(vec![
@@ -45,7 +45,7 @@ fn a_variant_names_exactly_the_keys_it_changes() {
         .preset()
         .replacen("corr_sigma_m = 0.2", "corr_sigma_m = 0.3", 1);
     let r = beacons.resolve(&text, "v", None, None).unwrap();
-    match Setup::of(*beacons, &r.toml) {
+    match r.setup.clone() {
         Setup::Variant(keys) => {
             assert_eq!(keys.len(), 1, "{keys:?}");
             assert!(keys[0].starts_with("cases[") && keys[0].ends_with("].corr_sigma_m"));
@@ -103,6 +103,7 @@ fn seed_on_a_deterministic_experiment_and_huge_seeds_are_usage_errors() {
         base_dir: root(),
         force: false,
         limits: Limits::default(),
+        extras: Default::default(),
     };
     let reg = registry();
     let e = run_scenario(&options, &reg).unwrap_err();

@@ -306,6 +306,7 @@ pub fn run(
                 base_dir,
                 force: false,
                 limits: fathom_sim::cost::Limits::default(),
+                extras: Default::default(),
             };
             let (result, _) = py
                 .detach(|| {

@@ -19,7 +19,7 @@ use serde::Deserialize;
 use crate::cost::{Cost, Limits};
 use crate::driver::{ExperimentResult, WriteOptions, error_chain, execute_assessed_to};
 use crate::error::SimError;
-use crate::experiment::{Assessed, DynExperiment, Environment, Job};
+use crate::experiment::{Assessed, DynExperiment, Environment, Extras, Job};
 use crate::progress::Progress;
 use crate::scenario::ScenarioDoc;
 
@@ -283,6 +283,8 @@ pub struct RunOptions {
     pub force: bool,
     /// The limits the scenario's cost must fit (`--max-memory-gb`, `--max-hours`).
     pub limits: Limits,
+    /// When the paper's sensitivity batches and claims run (`--paper-extras`: always).
+    pub extras: Extras,
 }
 
 /// Check, then run a user's scenario file with its experiment; writes the experiment's
@@ -355,6 +357,7 @@ pub fn job_of<'a>(
         progress,
         env: Environment {
             limits: options.limits,
+            extras: options.extras,
             ..Environment::new(options.base_dir.clone())
         },
     }

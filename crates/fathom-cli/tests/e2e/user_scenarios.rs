@@ -92,6 +92,18 @@ fn walkthrough(tag: &str, text: &str, k: usize) {
     // Not a terminal: no progress bar on stderr.
     assert!(ran.stderr.is_empty(), "{ran:?}");
     assert!(ran.stdout.starts_with("beacons ("), "{}", ran.stdout);
+    // The user's scenario is reported as theirs: not the paper's seed file, none of
+    // the paper's layout batches or claims, a short table with the rest counted.
+    assert!(
+        ran.stdout
+            .starts_with("beacons (your scenario my_beacons.toml)")
+            && !ran.stdout.contains("003_")
+            && !ran.stdout.contains("layout")
+            && !ran.stdout.contains("claims")
+            && ran.stdout.contains("more rows in report.md"),
+        "{}",
+        ran.stdout
+    );
     assert!(
         ran.stdout.contains("outputs: out/my_beacons"),
         "{}",
@@ -123,6 +135,11 @@ fn walkthrough(tag: &str, text: &str, k: usize) {
 fn sane_results(out: &Path, k: usize) {
     let summary: serde_json::Value = serde_json::from_str(&read(out, "summary.json")).unwrap();
     assert_eq!(summary["runs"], 6);
+    assert_eq!(
+        summary["claims"].as_array().map(Vec::len),
+        Some(0),
+        "{summary}"
+    );
     let rows = summary["rows"].as_array().unwrap();
     for scheme in ["AS", "SC", "SI"] {
         let value = |metric: &str| {
@@ -166,6 +183,38 @@ fn six_beacons_from_an_edited_preset_run_end_to_end() {
         &edited_table(&readme_beacons_table()),
         6,
     );
+}
+
+/// `--paper-extras` runs the paper's layout batches and judges its claims on a user's
+/// scenario (the negative control of the walkthrough's "reported as yours").
+#[test]
+fn paper_extras_on_a_user_scenario_run_the_layouts_and_claims() {
+    let dir = scratch("user-paper-extras");
+    let text = edited_table(&readme_beacons_table());
+    std::fs::write(dir.join("my_beacons.toml"), &text).unwrap();
+    let ran = fathom(
+        &dir,
+        &[
+            "run",
+            "my_beacons.toml",
+            "--runs",
+            "4",
+            "--out",
+            "out",
+            "--paper-extras",
+        ],
+    );
+    assert_eq!(ran.code, 0, "{ran:?}");
+    assert!(
+        ran.stdout.contains("layout one_sided") && ran.stdout.contains("claims on your scenario"),
+        "{}",
+        ran.stdout
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&read(&dir.join("out"), "summary.json")).unwrap();
+    assert!(!summary["claims"].as_array().unwrap().is_empty());
+    let resolved = read(&dir.join("out"), "scenario.resolved.toml");
+    assert!(resolved.contains("[[geometry]]"), "{resolved}");
 }
 
 #[test]

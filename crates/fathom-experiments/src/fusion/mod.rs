@@ -84,6 +84,7 @@ impl Experiment for Fusion {
         "INS-only",
         "DVL-DR",
     ];
+    const CONSOLE_METRICS: &'static [&'static str] = &["mean_3d", "std_3d"];
     const ABOUT: &'static str = "INS+DVL fusion: measurement fusion, track-to-track and the equalize-fuse-feedback filter on one UUV mission (seed 000, Tables 2-3)";
 
     fn check(&self, scenario: &FusionScenario, file: &str) -> Result<FusionSetup, SimError> {

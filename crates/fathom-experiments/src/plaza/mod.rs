@@ -56,6 +56,7 @@ impl Experiment for Plaza {
     const SEED_DOC: &'static str = "data/plaza1/README.md";
     const DEFAULT_SCENARIO: &'static str = "scenarios/plaza.toml";
     const PRESET: &'static str = include_str!("../../../../scenarios/plaza.toml");
+    const CONSOLE_METRICS: &'static [&'static str] = &["rmse", "max"];
     const ABOUT: &'static str = "range-beacon localization on real data (CMU Plaza1): dead reckoning vs AS / SC / SI with range calibration and robust gating";
     // `check` reads the data folder as a run does.
     const CHECK_PREPARES: bool = true;

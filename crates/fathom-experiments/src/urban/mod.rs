@@ -77,6 +77,7 @@ impl Experiment for Urban {
         "MGPMF",
         "PF",
     ];
+    const CONSOLE_METRICS: &'static [&'static str] = &["rmse_3d", "rmse_h", "switches"];
     const ABOUT: &'static str = "map-aided quadrotor navigation under a bridge and around buildings: INS, GPS/INS with and without the LOS test, switching GREKF / MGPMF / particle filter (seed 004, Fig. 8-10, Table 2)";
     // `check` loads the worlds and tests the waypoints against them as a run does.
     const CHECK_PREPARES: bool = true;

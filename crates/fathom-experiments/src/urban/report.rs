@@ -119,86 +119,93 @@ pub(super) fn write(prep: &Prepared, main: &[KeptRun], out: &mut Analysis) {
                 ]
             })
             .collect();
-        if !paper.is_empty() {
+        if !paper.is_empty() && out.paper_extras() {
             md.push_str("Paper against this run (reference only):\n\n");
             md.push_str(&md_table(&["row", "metric", "paper", "reproduced"], &paper));
             md.push('\n');
         }
     }
-    md.push_str("## Claims\n\n");
-    if !c.all_methods() {
-        let names: Vec<&str> = c.methods.iter().map(|m| m.name()).collect();
-        md.push_str(&format!(
-            "`methods` selects {} of the {} methods ({}): the paper's claims compare the \
-             methods and are not evaluated{}. The tables above are this run's own results.\n\n",
-            names.len(),
-            Method::ALL.len(),
-            names.join(", "),
-            if c.ablations_skipped > 0 {
-                format!(
-                    "; {} ablation(s) of methods not selected did not run",
-                    c.ablations_skipped
-                )
-            } else {
-                String::new()
-            }
-        ));
-    }
-    let verdicts = if c.all_methods() {
-        claims(&rows, c.table2_tolerance)
-    } else {
-        Vec::new()
-    };
-    for cl in &verdicts {
-        md.push_str(&format!(
-            "- `{}` **{}**: {}\n",
-            cl.id,
-            cl.verdict
-                .as_deref()
-                .unwrap_or(if cl.holds { "holds" } else { "does not hold" }),
-            cl.detail
-        ));
-    }
-    let failed: Vec<&str> = verdicts
-        .iter()
-        .filter(|c| !c.holds)
-        .map(|c| c.id.as_str())
-        .collect();
-    if verdicts.is_empty() {
-        // No claim was evaluated (a subset of the methods, said above).
-    } else if failed.is_empty() {
-        md.push_str("\nEvery claim holds in this run.\n\n");
-    } else {
-        md.push_str(&format!(
-            "\nNot reproduced here: {} (numbers above).\n\n",
-            failed
-                .iter()
-                .map(|s| format!("`{s}`"))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
+    // The paper's claims, its numbers and its errata belong to its setup: a user's
+    // variant (a world of their own) is reported as theirs.
+    if out.paper_extras() {
+        md.push_str("## Claims\n\n");
+        if !c.all_methods() {
+            let names: Vec<&str> = c.methods.iter().map(|m| m.name()).collect();
+            md.push_str(&format!(
+                "`methods` selects {} of the {} methods ({}): the paper's claims compare the \
+                 methods and are not evaluated{}. The tables above are this run's own results.\n\n",
+                names.len(),
+                Method::ALL.len(),
+                names.join(", "),
+                if c.ablations_skipped > 0 {
+                    format!(
+                        "; {} ablation(s) of methods not selected did not run",
+                        c.ablations_skipped
+                    )
+                } else {
+                    String::new()
+                }
+            ));
+        }
+        let verdicts = if c.all_methods() {
+            claims(&rows, c.table2_tolerance)
+        } else {
+            Vec::new()
+        };
+        for cl in &verdicts {
+            md.push_str(&format!(
+                "- `{}` **{}**: {}\n",
+                cl.id,
+                cl.verdict
+                    .as_deref()
+                    .unwrap_or(if cl.holds { "holds" } else { "does not hold" }),
+                cl.detail
+            ));
+        }
+        let failed: Vec<&str> = verdicts
+            .iter()
+            .filter(|c| !c.holds)
+            .map(|c| c.id.as_str())
+            .collect();
+        if verdicts.is_empty() {
+            // No claim was evaluated (a subset of the methods, said above).
+        } else if failed.is_empty() {
+            md.push_str("\nEvery claim holds in this run.\n\n");
+        } else {
+            md.push_str(&format!(
+                "\nNot reproduced here: {} (numbers above).\n\n",
+                failed
+                    .iter()
+                    .map(|s| format!("`{s}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
     }
     md.push_str(&switching_text(c, &rows));
     md.push_str(&spread_text(prep, main));
     md.push_str(&consistency_text(c, &rows));
     md.push_str(&shadowing_text(c, &rows));
     md.push_str(&ablation_text(prep, &rows));
-    md.push_str("## The paper's inconsistencies found on the way\n\n");
-    for finding in PAPER_FINDINGS {
-        md.push_str(&format!("- eq. {}: {}\n", finding.equation, finding.text));
+    if out.paper_extras() {
+        md.push_str("## The paper's inconsistencies found on the way\n\n");
+        for finding in PAPER_FINDINGS {
+            md.push_str(&format!("- eq. {}: {}\n", finding.equation, finding.text));
+        }
+        let v = &c.quad.vehicle;
+        let eq22 = eq22_discrepancies(v.arm_length(), v.kappa());
+        md.push_str(&format!(
+            "- eq. (21)/(22), checked for this vehicle (l = {} m, kappa = {} m): {} coefficients of the printed eq. (22) differ from the inverse of eq. (21)",
+            f(v.arm_length(), 3),
+            f(v.kappa(), 4),
+            eq22.as_ref().map_or("(not invertible)".to_string(), |d| d.len().to_string())
+        ));
+        for finding in EQ21_EQ22_FINDINGS {
+            md.push_str(&format!("; {finding}"));
+        }
+        md.push_str(".\n\n");
     }
-    let v = &c.quad.vehicle;
-    let eq22 = eq22_discrepancies(v.arm_length(), v.kappa());
-    md.push_str(&format!(
-        "- eq. (21)/(22), checked for this vehicle (l = {} m, kappa = {} m): {} coefficients of the printed eq. (22) differ from the inverse of eq. (21)",
-        f(v.arm_length(), 3),
-        f(v.kappa(), 4),
-        eq22.as_ref().map_or("(not invertible)".to_string(), |d| d.len().to_string())
-    ));
-    for finding in EQ21_EQ22_FINDINGS {
-        md.push_str(&format!("; {finding}"));
-    }
-    md.push_str(".\n\n## Settings the paper does not give (this scenario's values)\n\n");
+    md.push_str("## Settings the paper does not give (this scenario's values)\n\n");
     for (k, val) in &c.unstated {
         md.push_str(&format!("- `{k}`: {val}\n"));
     }

@@ -23,6 +23,7 @@ use super::{ExperimentResult, OutDir, RunInfo, write_executed};
 use crate::SimError;
 use crate::experiment::{
     Assessed, Batch, DynExperiment, FoundRecord, Job, RecordSink, RecordSource, Shard,
+    differing_keys,
 };
 use fathom_core::echo::{echo, echo_path};
 use fathom_report::output::write_text;
@@ -77,6 +78,37 @@ fn sha256_hex(text: &str) -> String {
         .iter()
         .map(|b| format!("{b:02x}"))
         .collect()
+}
+
+/// "the scenario differs from `<first>`'s in `a.b`, `c`" (the keys, not the hashes):
+/// the resolved scenarios of two shards compared key by key.
+fn scenario_mismatch(m: &Manifest, first: &Manifest, first_dir: &Path) -> String {
+    let parse = |t: &str| t.parse::<toml::Table>().ok();
+    let keys = match (parse(&m.resolved_scenario), parse(&first.resolved_scenario)) {
+        (Some(a), Some(b)) => differing_keys(&a, &b),
+        _ => Vec::new(),
+    };
+    let what = if keys.is_empty() {
+        "its text (no key differs: comments or layout)".to_string()
+    } else {
+        let shown: Vec<String> = keys
+            .iter()
+            .take(10)
+            .map(|k| format!("`{}`", echo(k)))
+            .collect();
+        let more = keys.len().saturating_sub(shown.len());
+        let more = if more > 0 {
+            format!(" and {more} more")
+        } else {
+            String::new()
+        };
+        format!("{}{more}", shown.join(", "))
+    };
+    format!(
+        "its resolved scenario differs from that of `{}` in {what}: the shards must run \
+         the same scenario (with the same --runs and --seed)",
+        echo_path(first_dir)
+    )
 }
 
 fn records_file(dir: &Path, batch: usize) -> PathBuf {
@@ -265,9 +297,11 @@ fn check_manifests(shards: &[(PathBuf, Manifest)]) -> Result<Vec<Vec<PathBuf>>, 
                 ),
             ));
         }
+        if m.experiment == first.experiment && m.scenario_sha256 != first.scenario_sha256 {
+            return Err(bad(dir, scenario_mismatch(m, first, first_dir)));
+        }
         for (field, a, b) in [
             ("experiment", &m.experiment, &first.experiment),
-            ("scenario", &m.scenario_sha256, &first.scenario_sha256),
             ("fathom version", &m.fathom_version, &first.fathom_version),
         ] {
             if a != b {
@@ -488,7 +522,7 @@ pub fn merge(
     };
     let assessed = exp.assess(&job)?;
     let claim = OutDir::claim(out_dir, force)?;
-    let setup = super::Setup::of_table(exp, &assessed.table);
+    let setup = assessed.resolved.setup.clone();
     let start = Instant::now();
     let mut source = FileSource {
         order,

@@ -19,7 +19,6 @@
 pub mod campaign;
 mod paper;
 mod report;
-mod setup;
 mod single_run;
 #[cfg(test)]
 mod tests;
@@ -32,12 +31,13 @@ use crate::SimError;
 use crate::experiment::{Assessed, DynExperiment, Executed, Job, OutputFile};
 use fathom_report::output::{Summary, write_summary_json, write_text, write_with};
 
+pub use crate::experiment::Setup;
 pub use fathom_report::outdir::{OutDir, RUN_INFO_FILE, RunInfo, write_file_atomically};
-pub use setup::Setup;
 
 pub use paper::{PaperOptions, PaperResult, run_paper, run_paper_to};
 pub use report::{
-    TABLE_DECIMALS, console_claims, console_rows, console_section, console_setup, fmt_value,
+    TABLE_DECIMALS, console_claims, console_main_rows, console_rows, console_section,
+    console_setup, fmt_value,
 };
 pub use single_run::SingleRun;
 
@@ -148,7 +148,7 @@ pub fn execute_assessed_to(
     options: &WriteOptions,
 ) -> Result<(ExperimentResult, RunInfo), SimError> {
     let claim = OutDir::claim(out_dir, options.force)?;
-    let setup = Setup::of_table(exp, &assessed.table);
+    let setup = assessed.resolved.setup.clone();
     let start = Instant::now();
     let executed = assessed.execute()?;
     let elapsed = start.elapsed();

@@ -285,16 +285,24 @@ pub(crate) fn experiment_report(
         md.push('\n');
         md.push_str(&legend);
     }
-    md.push_str(match (framing.paper, setup.is_paper()) {
-        (false, _) => "\n## Checks\n\n",
-        (true, true) => "\n## Claims\n\n",
-        (true, false) => {
-            "\n## The paper's claims on your scenario\n\nThe paper's claims are about its own \
-             setup; here they are evaluated on your scenario's numbers.\n\n"
-        }
-    });
+    md.push_str(
+        match (framing.paper, setup.is_paper(), s.claims.is_empty()) {
+            (false, _, _) => "\n## Checks\n\n",
+            (true, true, _) => "\n## Claims\n\n",
+            (true, false, true) => {
+                "\n## The paper's claims\n\nNot judged: they are about the paper's own setup \
+             (`fathom run --paper-extras` judges them on your scenario).\n"
+            }
+            (true, false, false) => {
+                "\n## The paper's claims on your scenario\n\nThe paper's claims are about its own \
+             setup; here they are evaluated on your scenario's numbers (`--paper-extras`).\n\n"
+            }
+        },
+    );
     if s.claims.is_empty() {
-        md.push_str("(no claims evaluated)\n");
+        if !framing.paper || setup.is_paper() {
+            md.push_str("(no claims evaluated)\n");
+        }
     } else {
         let rows: Vec<Vec<String>> = s
             .claims
@@ -332,6 +340,32 @@ pub(crate) fn experiment_report(
 pub fn console_rows(r: &ExperimentResult) -> String {
     let (head, rows) = table(&r.summary.rows, &r.units, &r.setup, Framing::of(r));
     text_table(&head, &rows)
+}
+
+/// The short console table of `fathom run`: the rows whose metric is one of
+/// `metrics` (every row when empty), and a line counting the others, which are in
+/// `report.md` and `summary.json`.
+pub fn console_main_rows(r: &ExperimentResult, metrics: &[&str]) -> String {
+    if metrics.is_empty() {
+        return console_rows(r);
+    }
+    let main: Vec<Row> = r
+        .summary
+        .rows
+        .iter()
+        .filter(|row| metrics.contains(&row.metric.as_str()))
+        .cloned()
+        .collect();
+    let (head, rows) = table(&main, &r.units, &r.setup, Framing::of(r));
+    let mut t = text_table(&head, &rows);
+    let rest = r.summary.rows.len() - main.len();
+    if rest > 0 {
+        t.push_str(&format!(
+            "({rest} more row{} in report.md and summary.json)\n",
+            if rest == 1 { "" } else { "s" }
+        ));
+    }
+    t
 }
 
 /// The console section of one experiment: run count, seed, time, the setup, every

@@ -138,12 +138,22 @@ pub struct Analysis {
     pub(crate) signed: std::collections::BTreeSet<String>,
     /// How rows summarize runs; `None`: the defaults with seed 0 (unit tests).
     pub(crate) statistics: Option<fathom_stats::SummarySettings>,
+    /// A user's variant of the paper's setup, run without the paper's extras
+    /// ([`super::Extras`]).
+    pub(crate) user_variant: bool,
 }
 
 impl Analysis {
     /// An empty analysis.
     pub fn new() -> Self {
         Self::default()
+    }
+
+    /// Whether the paper's extras run ([`super::Extras`]): the scenario is the paper's
+    /// setup, or the user asked for them. Paper-only report text (errata, the paper's
+    /// references) is written only then; claims are dropped by the driver otherwise.
+    pub fn paper_extras(&self) -> bool {
+        !self.user_variant
     }
 
     /// Appends a row of `summary.json`.

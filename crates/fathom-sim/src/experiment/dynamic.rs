@@ -3,7 +3,7 @@
 
 use rand_chacha::ChaCha8Rng;
 
-use super::{Analysis, Batch, Environment, Experiment, ScenarioFile};
+use super::{Analysis, Batch, Environment, Experiment, Extras, ScenarioFile, Setup};
 use crate::SimError;
 use crate::cost::Cost;
 use crate::montecarlo::try_run_indices;
@@ -44,6 +44,11 @@ pub struct Resolved {
     /// How the rows summarize the runs (checked `[statistics]`, seeded from the base
     /// seed; the defaults for a deterministic job).
     pub statistics: fathom_stats::SummarySettings,
+    /// How the scenario relates to the paper's setup (compared before
+    /// [`Experiment::main_only`]).
+    pub setup: Setup,
+    /// Whether the paper's extras run ([`Extras`]): its sensitivity batches and claims.
+    pub paper_extras: bool,
 }
 
 /// The outcome of [`DynExperiment::execute`].
@@ -138,6 +143,8 @@ pub trait DynExperiment: Send + Sync {
     fn about(&self) -> &'static str;
     /// [`Experiment::METHODS`].
     fn methods(&self) -> &'static [&'static str];
+    /// [`Experiment::CONSOLE_METRICS`].
+    fn console_metrics(&self) -> &'static [&'static str];
     /// [`Experiment::PRESET`].
     fn preset(&self) -> &'static str;
     /// [`Experiment::PAPER`].
@@ -354,6 +361,7 @@ fn read_checked<E: Experiment>(
     doc: ScenarioDoc<'_>,
     runs: Option<usize>,
     seed: Option<u64>,
+    extras: Option<Extras>,
 ) -> Result<(E::Scenario, E::Checked, Resolved), SimError> {
     let file = doc.file();
     let as_written = doc.table().ok();
@@ -386,6 +394,30 @@ fn read_checked<E: Experiment>(
     {
         return Err(SimError::invalid(file, "base_seed", seed_too_large(s)));
     }
+    // The paper's setup is judged on the scenario as written (overrides applied, runs
+    // and seeds aside); a variant drops the paper's extras unless they are asked for.
+    // (`extras` is `None` only for the preset itself, which is not compared with
+    // itself.)
+    let setup = match extras {
+        Some(_) => Setup::of_table(exp, &table_of(&scenario, file)?),
+        None => Setup::Paper,
+    };
+    // (a job on the user's own data has no paper: its checks are its own and stay)
+    let paper_extras = !E::PAPER || extras == Some(Extras::Always) || setup.is_paper();
+    let setup = if paper_extras {
+        setup
+    } else {
+        exp.main_only(&mut scenario);
+        // The keys are named against the preset without its extras too, so that the
+        // merge of a campaign (which reads this stripped scenario back) names the same
+        // keys; a variant only in the extras keeps the keys found before.
+        let mut preset: E::Scenario = ScenarioDoc::parse(E::PRESET, "preset")?.into_typed()?;
+        exp.main_only(&mut preset);
+        match Setup::between(&table_of(&preset, "preset")?, &table_of(&scenario, file)?) {
+            Setup::Paper => setup,
+            stripped => stripped,
+        }
+    };
     // A Monte Carlo experiment's main batch needs two runs for an interval: checked
     // here once for every experiment.
     let main_runs = match scenario.runs() {
@@ -415,6 +447,8 @@ fn read_checked<E: Experiment>(
         runs: scenario.runs(),
         base_seed: scenario.base_seed(),
         statistics,
+        setup,
+        paper_extras,
     };
     Ok((scenario, checked, resolved))
 }
@@ -515,7 +549,12 @@ fn finish<E: Experiment>(
     folds: Vec<E::Fold>,
 ) -> Result<Executed, SimError> {
     let mut analysis = Analysis::with_statistics(resolved.statistics);
+    analysis.user_variant = !resolved.paper_extras;
     exp.analyse(prepared, kept, folds, &mut analysis)?;
+    if !resolved.paper_extras {
+        // The paper's claims are about its setup: not judged on a user's variant.
+        analysis.claims.clear();
+    }
     analysis.fill_units();
     analysis.check_non_negative_intervals()?;
     let runs = batches.first().map_or(0, |b| b.runs);
@@ -556,6 +595,10 @@ impl<E: Experiment> DynExperiment for E {
         E::METHODS
     }
 
+    fn console_metrics(&self) -> &'static [&'static str] {
+        E::CONSOLE_METRICS
+    }
+
     fn preset(&self) -> &'static str {
         E::PRESET
     }
@@ -578,7 +621,8 @@ impl<E: Experiment> DynExperiment for E {
         job: &'j Job<'j>,
     ) -> Result<Assessed<'j>, SimError> {
         check_overrides(job.runs, job.seed, job.threads)?;
-        let (scenario, checked, resolved) = read_checked(self, doc, job.runs, job.seed)?;
+        let (scenario, checked, resolved) =
+            read_checked(self, doc, job.runs, job.seed, Some(job.env.extras))?;
         let table = table_of(&scenario, job.file)?;
         let cost = cost_of(self, &scenario, job.threads);
         cost.check(&job.env.limits, job.file)?;
@@ -602,12 +646,19 @@ impl<E: Experiment> DynExperiment for E {
         runs: Option<usize>,
         seed: Option<u64>,
     ) -> Result<Resolved, SimError> {
-        read_checked(self, ScenarioDoc::parse(text, file)?, runs, seed).map(|(_, _, r)| r)
+        read_checked(
+            self,
+            ScenarioDoc::parse(text, file)?,
+            runs,
+            seed,
+            Some(Extras::WhenPaper),
+        )
+        .map(|(_, _, r)| r)
     }
 
     fn preset_table(&self) -> Option<toml::Table> {
         let doc = ScenarioDoc::parse(E::PRESET, "preset").ok()?;
-        let (scenario, _, _) = read_checked(self, doc, None, None).ok()?;
+        let (scenario, _, _) = read_checked(self, doc, None, None, None).ok()?;
         table_of(&scenario, "preset").ok()
     }
 
@@ -619,7 +670,13 @@ impl<E: Experiment> DynExperiment for E {
         seed: Option<u64>,
         threads: Option<usize>,
     ) -> Result<Cost, SimError> {
-        let (scenario, _, _) = read_checked(self, ScenarioDoc::parse(text, file)?, runs, seed)?;
+        let (scenario, _, _) = read_checked(
+            self,
+            ScenarioDoc::parse(text, file)?,
+            runs,
+            seed,
+            Some(Extras::WhenPaper),
+        )?;
         Ok(cost_of(self, &scenario, threads))
     }
 
@@ -629,7 +686,13 @@ impl<E: Experiment> DynExperiment for E {
         file: &str,
         env: &Environment,
     ) -> Result<SingleRunFn, SimError> {
-        let (_, checked, _) = read_checked(self, ScenarioDoc::parse(text, file)?, None, None)?;
+        let (_, checked, _) = read_checked(
+            self,
+            ScenarioDoc::parse(text, file)?,
+            None,
+            None,
+            Some(env.extras),
+        )?;
         let prepared = self.prepare(checked, env)?;
         if self.batches(&prepared).is_empty() {
             return Err(SimError::invalid_argument(
@@ -657,8 +720,13 @@ pub fn prepare_typed<E: Experiment>(
     file: &str,
     env: &Environment,
 ) -> Result<(E::Prepared, Resolved), SimError> {
-    let (scenario, checked, resolved) =
-        read_checked(exp, ScenarioDoc::parse(text, file)?, None, None)?;
+    let (scenario, checked, resolved) = read_checked(
+        exp,
+        ScenarioDoc::parse(text, file)?,
+        None,
+        None,
+        Some(env.extras),
+    )?;
     cost_of(exp, &scenario, None).check(&env.limits, file)?;
     Ok((prepare_input(exp, checked, env)?, resolved))
 }

@@ -35,6 +35,7 @@
 mod analysis;
 mod dynamic;
 mod rows;
+mod setup;
 
 use std::path::PathBuf;
 
@@ -51,6 +52,7 @@ pub use dynamic::{
     Shard, SingleRunFn, check_overrides, prepare_typed,
 };
 pub use rows::{equivalence_claim, row_of_summary};
+pub use setup::{Setup, differing_keys};
 
 /// The header keys every scenario file has, read and overridden by the driver.
 pub trait ScenarioFile: Serialize + DeserializeOwned + schemars::JsonSchema + Send + Sync {
@@ -154,6 +156,22 @@ pub struct Environment {
     pub base_dir: PathBuf,
     /// The limits the scenario's estimated cost must fit ([`crate::cost`]).
     pub limits: Limits,
+    /// When the paper's extras run: its sensitivity batches (see
+    /// [`Experiment::main_only`]) and its claims.
+    pub extras: Extras,
+}
+
+/// When an experiment runs what belongs to its paper rather than to a scenario: the
+/// sensitivity batches on the paper's own layouts and readings, and the paper's
+/// claims.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Extras {
+    /// Only on the paper's setup ([`Setup::Paper`]): a user's variant is reported as
+    /// the user's (main batch, rows, figures), without the paper's claims.
+    #[default]
+    WhenPaper,
+    /// Always (`fathom run --paper-extras`): the paper's claims judged on any scenario.
+    Always,
 }
 
 impl Environment {
@@ -162,6 +180,7 @@ impl Environment {
         Environment {
             base_dir: base_dir.into(),
             limits: Limits::default(),
+            extras: Extras::default(),
         }
     }
 }
@@ -201,6 +220,9 @@ pub trait Experiment: Clone + Send + Sync + 'static {
     /// The names the scenario's `methods = [...]` key accepts, in report order (shown
     /// by `fathom list`); empty when the experiment has no `methods` key.
     const METHODS: &'static [&'static str] = &[];
+    /// The metrics of the short table `fathom run` prints (every method's row of each);
+    /// empty: every row. The report and `summary.json` always hold every row.
+    const CONSOLE_METRICS: &'static [&'static str] = &[];
     /// Whether the experiment reproduces a paper (its preset is the paper's setup, its
     /// rows may carry the paper's numbers and its claims are the paper's). `false` for
     /// a job on the user's own data (the own-log replays): its preset is only the
@@ -212,6 +234,14 @@ pub trait Experiment: Clone + Send + Sync + 'static {
     /// file it accepts is one `fathom run` starts. Experiments whose preparation only
     /// computes (and may take long) leave it `false`.
     const CHECK_PREPARES: bool = false;
+
+    /// Removes from a scenario that is not the paper's setup what only the paper's
+    /// setup runs by default (the paper's own sensitivity layouts or readings), so that
+    /// the check, the cost and the resolved scenario are those of what runs. Called
+    /// before [`Experiment::check`]; the default keeps everything.
+    fn main_only(&self, scenario: &mut Self::Scenario) {
+        let _ = scenario;
+    }
 
     /// Validates `scenario` (`file` labels error messages). Fast and free of I/O.
     ///

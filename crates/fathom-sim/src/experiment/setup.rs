@@ -33,8 +33,13 @@ impl Setup {
             // An experiment without a usable preset has no paper setup to compare with.
             return Setup::Variant(vec!["(no preset to compare with)".into()]);
         };
+        Setup::between(&preset, mine)
+    }
+
+    /// Compares the resolved scenario `mine` with the resolved `preset`.
+    pub fn between(preset: &toml::Table, mine: &toml::Table) -> Setup {
         let mut differs = Vec::new();
-        diff_tables(&preset, mine, "", &mut differs);
+        diff_tables(preset, mine, "", &ignored, &mut differs);
         if differs.is_empty() {
             Setup::Paper
         } else {
@@ -69,7 +74,21 @@ fn ignored(path: &str, key: &str) -> bool {
         || path.starts_with("figures.")
 }
 
-fn diff_tables(a: &toml::Table, b: &toml::Table, prefix: &str, out: &mut Vec<String>) {
+/// The keys (dotted paths, array items with their index) whose values differ between
+/// two resolved scenarios, every key compared (e.g. two shards of one campaign).
+pub fn differing_keys(a: &toml::Table, b: &toml::Table) -> Vec<String> {
+    let mut out = Vec::new();
+    diff_tables(a, b, "", &|_, _| false, &mut out);
+    out
+}
+
+fn diff_tables(
+    a: &toml::Table,
+    b: &toml::Table,
+    prefix: &str,
+    skip: &dyn Fn(&str, &str) -> bool,
+    out: &mut Vec<String>,
+) {
     let mut keys: Vec<&String> = a.keys().chain(b.keys()).collect();
     keys.sort();
     keys.dedup();
@@ -79,12 +98,12 @@ fn diff_tables(a: &toml::Table, b: &toml::Table, prefix: &str, out: &mut Vec<Str
         } else {
             format!("{prefix}.{k}")
         };
-        if ignored(&path, k) {
+        if skip(&path, k) {
             continue;
         }
         match (a.get(k), b.get(k)) {
             (Some(toml::Value::Table(x)), Some(toml::Value::Table(y))) => {
-                diff_tables(x, y, &path, out);
+                diff_tables(x, y, &path, skip, out);
             }
             (Some(toml::Value::Array(x)), Some(toml::Value::Array(y)))
                 if x.len() == y.len()
@@ -93,7 +112,7 @@ fn diff_tables(a: &toml::Table, b: &toml::Table, prefix: &str, out: &mut Vec<Str
             {
                 for (i, (p, q)) in x.iter().zip(y).enumerate() {
                     if let (toml::Value::Table(p), toml::Value::Table(q)) = (p, q) {
-                        diff_tables(p, q, &format!("{path}[{i}]"), out);
+                        diff_tables(p, q, &format!("{path}[{i}]"), skip, out);
                     }
                 }
             }
