@@ -5,9 +5,10 @@ use std::path::PathBuf;
 use anyhow::{Context, anyhow};
 use clap::{Args, Subcommand};
 use fathom_experiments::registry;
+use fathom_sim::cost;
 use fathom_sim::driver::campaign::{merge, read_manifest, run_assessed_shard, slurm_script};
 use fathom_sim::error_chain;
-use fathom_sim::experiment::{Environment, Job, Shard};
+use fathom_sim::experiment::{Assessed, DynExperiment, Environment, Job, Shard};
 use fathom_sim::user_run::{assess_scenario, check_command, one_line};
 
 use crate::{Failure, RunArgs, failure, progress_bar, run_hook};
@@ -64,13 +65,27 @@ pub(crate) fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Fail
         runs: args.runs,
         seed: args.seed,
         threads: args.threads,
-        progress: Some(run_hook(bar.clone())),
+        progress: Some(run_hook(bar.clone(), true)),
         env: Environment {
             limits: args.limits.limits()?,
             ..Environment::new(crate::current_dir()?)
         },
     };
     let (exp, assessed) = assess_scenario(&job, &registry).map_err(failure)?;
+    // The estimate before anything runs: this shard's part of the scenario's cost.
+    let main_runs = assessed.resolved.runs.unwrap_or(1).max(1);
+    let part = shard.range(main_runs).len() as f64 / main_runs as f64;
+    crate::say(&format!(
+        "{} shard {}/{}: runs {:?} of {main_runs} in the main batch (the same share of \
+         every batch); estimate for this shard: about {} on {} thread{}\n",
+        exp.name(),
+        shard.index,
+        shard.count,
+        shard.range(main_runs),
+        cost::duration(assessed.cost.seconds() * part),
+        assessed.cost.threads,
+        if assessed.cost.threads == 1 { "" } else { "s" },
+    ));
     let out = args.out.clone().unwrap_or_else(|| {
         crate::default_out(&format!(
             "{}-shard-{}-of-{}",
@@ -165,14 +180,16 @@ pub(crate) fn campaign_cmd(kind: &CampaignKind) -> Result<String, Failure> {
         progress: None,
         env: Environment::new(crate::current_dir()?),
     };
-    if let Err(e) = assess_scenario(&job, &registry()) {
+    let registry = registry();
+    let (exp, assessed) = assess_scenario(&job, &registry).map_err(|e| {
         let line = one_line(&error_chain(&e));
-        return Err(Failure::Usage(if line.contains("--runs") {
+        Failure::Usage(if line.contains("--runs") {
             anyhow!(line)
         } else {
             anyhow!("with --runs {}: {line}", args.runs)
-        }));
-    }
+        })
+    })?;
+    let estimate = campaign_estimate(exp, assessed, &job, args)?;
     let dir = args.dir.display().to_string();
     let script = slurm_script(
         &args.scenario.display().to_string(),
@@ -188,10 +205,68 @@ pub(crate) fn campaign_cmd(kind: &CampaignKind) -> Result<String, Failure> {
         .with_context(|| format!("cannot write `{}`", path.display()))
         .map_err(Failure::Usage)?;
     Ok(format!(
-        "wrote {}: {} shards of {} runs and a dependent merge; submit with `bash {}`\n",
+        "wrote {}: {} shards of {} runs and a dependent merge; submit with `bash {}`\n{estimate}",
         path.display(),
         args.shards,
         args.runs,
         path.display()
     ))
+}
+
+/// Runs in the sample shard that measures a campaign's time and disk per run.
+const SAMPLE_RUNS: usize = 2;
+
+/// The time and disk estimate of a campaign: the cost model's CPU time, and time and
+/// disk per run measured on a small shard of the campaign itself (the first
+/// `SAMPLE_RUNS` runs of every batch, written into a temporary folder and removed).
+fn campaign_estimate(
+    exp: &dyn DynExperiment,
+    assessed: Assessed<'_>,
+    job: &Job<'_>,
+    args: &SlurmArgs,
+) -> Result<String, Failure> {
+    let threads = assessed.cost.threads;
+    let model_cpu_s = assessed.cost.seconds() * threads as f64;
+    let sample = Shard {
+        index: 0,
+        count: (args.runs / SAMPLE_RUNS).max(1),
+    };
+    let sample_runs = sample.range(args.runs).len().max(1);
+    let dir = std::env::temp_dir().join(format!("fathom-campaign-sample-{}", std::process::id()));
+    let measured = run_assessed_shard(exp, assessed, job, sample, &dir, false);
+    let records_bytes = records_size(&dir);
+    let manifest_bytes = std::fs::metadata(dir.join("manifest.json")).map_or(0, |m| m.len());
+    let _ = std::fs::remove_dir_all(&dir);
+    let m = measured.map_err(failure)?;
+    let per_run_s = m.elapsed_s / sample_runs as f64;
+    let per_run_bytes = records_bytes as f64 / sample_runs as f64;
+    let runs = args.runs as f64;
+    let disk = per_run_bytes * runs + manifest_bytes as f64 * args.shards as f64;
+    Ok(format!(
+        "estimate (a sample shard of {sample_runs} run{} measured here on {threads} thread{}): \
+         {:.2} s per run, so about {} per shard and {} in all on such a node (cost model: \
+         {} of CPU time); disk: {} per run, about {} for the shards' records, plus the \
+         merged outputs (a single run's file set)\n",
+        if sample_runs == 1 { "" } else { "s" },
+        if threads == 1 { "" } else { "s" },
+        per_run_s,
+        cost::duration(per_run_s * runs / args.shards as f64),
+        cost::duration(per_run_s * runs),
+        cost::duration(model_cpu_s),
+        cost::bytes(per_run_bytes),
+        cost::bytes(disk),
+    ))
+}
+
+/// Bytes of the files in a shard folder apart from its manifest.
+fn records_size(dir: &std::path::Path) -> u64 {
+    std::fs::read_dir(dir)
+        .into_iter()
+        .flatten()
+        .flatten()
+        .filter(|e| e.file_name() != "manifest.json")
+        .filter_map(|e| e.metadata().ok())
+        .filter(|m| m.is_file())
+        .map(|m| m.len())
+        .sum()
 }

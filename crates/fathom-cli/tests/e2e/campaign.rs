@@ -123,6 +123,16 @@ fn vkf_shards_merge_to_the_bytes_of_one_process() {
     check_experiment("vkf", &out);
 }
 
+/// Copies the files of the shard folder `from` into `to` (the records of every batch
+/// the scenario ran, whatever their number).
+fn copy_files(from: &std::path::Path, to: &std::path::Path) {
+    for e in std::fs::read_dir(from).unwrap().flatten() {
+        if e.path().is_file() {
+            std::fs::copy(e.path(), to.join(e.file_name())).unwrap();
+        }
+    }
+}
+
 #[test]
 fn broken_merges_are_refused_with_one_line_and_nothing_written() {
     let dir = scratch("campaign-broken");
@@ -133,15 +143,7 @@ fn broken_merges_are_refused_with_one_line_and_nothing_written() {
     let o = shards(&dir, "other.toml", "8", 2, "o");
     // A copy of shard 1 claiming another fathom version.
     std::fs::create_dir_all(dir.join("v")).unwrap();
-    for f in [
-        "manifest.json",
-        "records-0.jsonl",
-        "records-1.jsonl",
-        "records-2.jsonl",
-        "records-3.jsonl",
-    ] {
-        std::fs::copy(dir.join(&s[1]).join(f), dir.join("v").join(f)).unwrap();
-    }
+    copy_files(&dir.join(&s[1]), &dir.join("v"));
     let m = std::fs::read_to_string(dir.join("v/manifest.json")).unwrap();
     std::fs::write(
         dir.join("v/manifest.json"),
@@ -150,15 +152,7 @@ fn broken_merges_are_refused_with_one_line_and_nothing_written() {
     .unwrap();
     // A copy of shard 0 with a corrupted record line.
     std::fs::create_dir_all(dir.join("c")).unwrap();
-    for f in [
-        "manifest.json",
-        "records-0.jsonl",
-        "records-1.jsonl",
-        "records-2.jsonl",
-        "records-3.jsonl",
-    ] {
-        std::fs::copy(dir.join(&s[0]).join(f), dir.join("c").join(f)).unwrap();
-    }
+    copy_files(&dir.join(&s[0]), &dir.join("c"));
     let r = std::fs::read_to_string(dir.join("c/records-0.jsonl")).unwrap();
     let first = r.lines().next().unwrap();
     let cut = &first[..first.len() / 2];
@@ -166,15 +160,7 @@ fn broken_merges_are_refused_with_one_line_and_nothing_written() {
     // A copy of shard 0 whose resolved scenario was edited after the run: its records
     // were made with other settings.
     std::fs::create_dir_all(dir.join("e")).unwrap();
-    for f in [
-        "manifest.json",
-        "records-0.jsonl",
-        "records-1.jsonl",
-        "records-2.jsonl",
-        "records-3.jsonl",
-    ] {
-        std::fs::copy(dir.join(&s[0]).join(f), dir.join("e").join(f)).unwrap();
-    }
+    copy_files(&dir.join(&s[0]), &dir.join("e"));
     let m = std::fs::read_to_string(dir.join("e/manifest.json")).unwrap();
     assert!(m.contains("corr_gap_s = 1.0"), "{m}");
     std::fs::write(
@@ -190,7 +176,7 @@ fn broken_merges_are_refused_with_one_line_and_nothing_written() {
             vec![s[0].as_str(), s[1].as_str(), s[1].as_str()],
             "duplicated shard",
         ),
-        (vec![s[0].as_str(), o[1].as_str()], "scenario"),
+        (vec![s[0].as_str(), o[1].as_str()], "corr_gap_s"),
         (vec![s[0].as_str(), "v"], "fathom version"),
         (vec!["c", s[1].as_str()], "records-0.jsonl:1"),
     ] {
@@ -257,11 +243,47 @@ fn slurm_campaign_refuses_run_counts_its_shards_cannot_run() {
         assert!(ran.stderr.contains(needle), "{}", ran.stderr);
         assert!(!dir.join("c").exists());
     }
-    ok(
+    let ran = fathom(
         &dir,
         &[
-            "campaign", "slurm", "b.toml", "--runs", "2", "--shards", "2", "--dir", "c",
+            "campaign", "slurm", "b.toml", "--runs", "40", "--shards", "2", "--dir", "c",
         ],
     );
+    assert_eq!(ran.code, 0, "{ran:?}");
     assert!(dir.join("c/campaign.sh").exists());
+    // The estimate comes from a sample shard of 2 runs of the campaign.
+    assert!(
+        ran.stdout.contains("a sample shard of 2 runs")
+            && ran.stdout.contains("s per run")
+            && ran.stdout.contains("per run, about"),
+        "{}",
+        ran.stdout
+    );
+}
+
+/// A shard prints its cost estimate before it runs and, without a terminal, a progress
+/// line every tenth of a batch.
+#[test]
+fn a_shard_prints_its_estimate_and_progress_lines() {
+    let dir = scratch("campaign-shard-progress");
+    std::fs::write(dir.join("b.toml"), reduced_beacons()).unwrap();
+    let ran = fathom(
+        &dir,
+        &[
+            "run", "b.toml", "--runs", "20", "--shard", "0/2", "--out", "s",
+        ],
+    );
+    assert_eq!(ran.code, 0, "{ran:?}");
+    let first = ran.stdout.lines().next().unwrap_or("");
+    assert!(
+        first.starts_with("beacons shard 0/2: runs 0..10 of 20") && first.contains("estimate"),
+        "{}",
+        ran.stdout
+    );
+    let progress = ran
+        .stdout
+        .lines()
+        .filter(|l| l.contains("runs of batch 1"))
+        .count();
+    assert!(progress >= 5, "{}", ran.stdout);
 }
