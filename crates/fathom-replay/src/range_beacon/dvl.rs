@@ -8,7 +8,9 @@
 //! give the yaw rate `wrap(psi_b - psi_a) / (t_b - t_a)` held over `(t_a, t_b]`, an
 //! input stamped `t_a` (the first interval starts at the last heading at or before
 //! the start, or at the start with `initial.csv`'s heading), as the Plaza replay
-//! turns odometry increments into rates. Ties: inputs, then ranges, then depth.
+//! turns odometry increments into rates. With `[dvl] heading_sigma_rad`, each heading
+//! row is also an absolute heading measurement (its own channel, wrapped residual).
+//! Ties: inputs, then ranges, then depth and headings.
 //! Process noise: each input's σ held for the median interval of its file
 //! ([`fathom_estimators::beacon_ekf::DvlAhrsMotionParams`]).
 
@@ -48,7 +50,11 @@ fn median_interval(times: impl Iterator<Item = f64>) -> Option<f64> {
 
 /// The inputs, ranges and depth as events on relative time, sorted (module docs),
 /// and the initial input.
-fn events(log: &RangeBeaconLog, with_measurements: bool) -> (Vec<Ev>, DvlAhrsInput) {
+fn events(
+    log: &RangeBeaconLog,
+    with_measurements: bool,
+    absolute_heading: bool,
+) -> (Vec<Ev>, DvlAhrsInput) {
     let Motion::Dvl { dvl, heading } = &log.motion else {
         return (Vec::new(), DvlAhrsInput::default());
     };
@@ -125,6 +131,25 @@ fn events(log: &RangeBeaconLog, with_measurements: bool) -> (Vec<Ev>, DvlAhrsInp
                     stamp: t - t0,
                     value: d,
                     model: BeaconMeasurement::Depth,
+                    tag,
+                }),
+            ));
+        }
+    }
+    if with_measurements && absolute_heading {
+        let channel = log.beacons.len() + 1;
+        for (tag, &(t, psi)) in heading.iter().enumerate() {
+            if t <= t0 {
+                continue;
+            }
+            ev.push((
+                t - t0,
+                2,
+                Event::Measurement(Observation {
+                    channel,
+                    stamp: t - t0,
+                    value: psi,
+                    model: BeaconMeasurement::Heading,
                     tag,
                 }),
             ));
@@ -227,15 +252,26 @@ pub fn run_method(
     let p0 = Matrix4::from_diagonal(&Vector4::new(pp, pp, pp, e.heading_sigma.powi(2)));
     let prior = Gaussian::new(x0, p0).map_err(|e| SimError::model("EKF prior", e))?;
     let with_measurements = !matches!(method.kind, MethodKind::DeadReckoning);
-    let (ev, initial) = events(log, with_measurements);
+    let (ev, initial) = events(log, with_measurements, s.heading_sigma.is_some());
     let ekf = Ekf::new(prior, 0.0, motion, initial).map_err(ctx)?;
     let k = log.beacons.len();
     let var = e.range_sigma.powi(2);
     let cov = e.correlation_sigma.powi(2);
     let d2 = s.depth_sigma.powi(2);
-    let channel_cov = DMatrix::from_fn(k + 1, k + 1, |i, j| match (i == k, j == k) {
-        (true, true) => d2,
-        (true, false) | (false, true) => 0.0,
+    // Channels: the k beacons (correlated), depth, and the absolute heading if used
+    // (both independent of the rest).
+    let h2 = s.heading_sigma.map(|v| v * v);
+    let channels = k + 1 + usize::from(h2.is_some());
+    let channel_cov = DMatrix::from_fn(channels, channels, |i, j| match (i, j) {
+        _ if i >= k || j >= k => {
+            if i != j {
+                0.0
+            } else if i == k {
+                d2
+            } else {
+                h2.unwrap_or(0.0)
+            }
+        }
         _ if i == j => var + cov,
         _ => cov,
     });
@@ -243,7 +279,7 @@ pub fn run_method(
         .map(|g| GateThreshold::from_sigma_distance(g).map_err(ctx))
         .transpose()?;
     let mut gates = vec![gate; k];
-    gates.push(None);
+    gates.resize(channels, None);
     let config = SchemeParams {
         scheme,
         epoch_period: e.epoch,

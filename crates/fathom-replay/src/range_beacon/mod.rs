@@ -196,9 +196,10 @@ impl MethodTrace {
             };
             if d.channel == depth_channel {
                 self.depths.push(i);
-            } else {
+            } else if d.channel < depth_channel {
                 self.ranges.push(i);
             }
+            // (a channel after depth is the absolute heading: not a range innovation)
         }
     }
 }

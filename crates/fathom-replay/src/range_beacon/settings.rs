@@ -100,6 +100,13 @@ pub struct DvlMotionToml {
     ///
     /// Unit: rad/s. Range: ≥ 0.
     pub yaw_rate_sigma_rad_per_s: f64,
+    /// Error σ of each heading row used also as an absolute heading measurement (a
+    /// compass or AHRS heading: corrects the drift of the integrated yaw rate). Unset:
+    /// headings enter only as yaw rates.
+    ///
+    /// Unit: rad. Range: > 0. Default: unset.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub heading_sigma_rad: Option<f64>,
 }
 
 /// `[depth]`.
@@ -256,6 +263,8 @@ pub struct RangeBeaconSettings {
     pub dvl_velocity_sigma: [f64; 3],
     /// Yaw-rate error σ, rad/s.
     pub yaw_rate_sigma: f64,
+    /// Absolute heading error σ, rad (`None`: no absolute heading update).
+    pub heading_sigma: Option<f64>,
     /// Depth σ, m.
     pub depth_sigma: f64,
     /// Recording period without truth, s.
@@ -303,6 +312,11 @@ impl RangeBeaconToml {
                 "dvl.yaw_rate_sigma_rad_per_s",
                 self.dvl.yaw_rate_sigma_rad_per_s,
             )?,
+            heading_sigma: self
+                .dvl
+                .heading_sigma_rad
+                .map(|v| require_positive(file, "dvl.heading_sigma_rad", v))
+                .transpose()?,
             depth_sigma: require_positive(file, "depth.sigma_m", self.depth.sigma_m)?,
             output_period: require_positive(file, "output.period_s", self.output.period_s)?,
             methods,

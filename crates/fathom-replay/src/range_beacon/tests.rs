@@ -240,6 +240,42 @@ fn a_dvl_log_localizes_in_3d_and_its_ranges_are_consistent() {
     );
 }
 
+/// `[dvl] heading_sigma_rad`: with no ranges and a start heading 0.3 rad off, the
+/// absolute heading update brings the EKF's heading to the truth; without it (the
+/// negative control) the yaw rates keep the initial error.
+#[test]
+fn an_absolute_heading_update_corrects_a_wrong_start_heading() {
+    let mut log = dvl_log(2);
+    log.ranges.clear();
+    let true_final = log
+        .truth
+        .as_ref()
+        .and_then(|t| t.last())
+        .and_then(|r| r.heading);
+    let true_final = true_final.unwrap();
+    // The heading sensor's first row at the start: the yaw rates telescope from it,
+    // not from `initial.csv`'s heading, which is 0.3 rad off.
+    let true_start = log.start.heading;
+    if let Motion::Dvl { heading, .. } = &mut log.motion {
+        heading.insert(0, (log.start.time, true_start));
+    }
+    log.start.heading += 0.3;
+    let base = config("range-beacon.toml").replace("sigma_m = 0.2", "sigma_m = 0.01");
+    let final_error = |text: &str| {
+        let s = parse_settings(text, "h.toml").unwrap();
+        let r = replay(&log, &s).unwrap();
+        let est = *r.method("AS").unwrap().trace.heading.last().unwrap();
+        fathom_core::units::wrap_pi(est - true_final).abs()
+    };
+    let rates_only = final_error(&base);
+    let with_heading = final_error(&base.replace(
+        "yaw_rate_sigma_rad_per_s = 0.01",
+        "yaw_rate_sigma_rad_per_s = 0.01\nheading_sigma_rad = 0.01",
+    ));
+    assert!(rates_only > 0.25, "rates only: {rates_only}");
+    assert!(with_heading < 0.02, "with absolute heading: {with_heading}");
+}
+
 #[test]
 fn bad_method_tables_name_the_key() {
     let base = config("range-beacon.toml");
