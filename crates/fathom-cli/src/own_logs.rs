@@ -51,8 +51,8 @@ pub(crate) enum LogCmd {
 pub(crate) struct ExampleArgs {
     /// Which kind of log.
     pub(crate) kind: KindArg,
-    /// The new log folder, which must not hold a log (default `fathom-out/<kind>-log`,
-    /// the `[data] dir` of `scenarios/<kind>.toml`).
+    /// The new log folder, which must not hold a log (default `fathom-out/<kind>-log`;
+    /// replay it with `fathom replay <kind> <folder>`).
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
     /// Length of the log, s.
@@ -71,8 +71,9 @@ pub(crate) struct FromPlazaArgs {
     /// Folder holding the Plaza data set's files (default: `data/plaza1`, looked up in
     /// the current directory and beside each of its ancestors: the repository's copy).
     pub(crate) plaza_dir: Option<PathBuf>,
-    /// The new log folder (default `fathom-out/plaza-log`, the `[data] dir` of
-    /// `scenarios/range-beacon-plaza.toml`).
+    /// The new log folder (default `fathom-out/plaza-log`; the repository keeps the
+    /// conversion of `data/plaza1` in `data/logs/plaza1-range-beacon`, the `[data] dir`
+    /// of `scenarios/range-beacon-plaza.toml`).
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
 }

@@ -21,9 +21,9 @@ pub(crate) enum ReplayData {
     /// CMU Plaza range-only data: wheel odometry, ranges to radio beacons, ground truth.
     Plaza(PlazaArgs),
     /// Your own range-beacon log (fathom's CSV layout, docs/own-data.md).
-    RangeBeacon(OwnArgs),
+    RangeBeacon(RangeBeaconArgs),
     /// Your own INS / DVL log (fathom's CSV layout, docs/own-data.md).
-    InsDvl(OwnArgs),
+    InsDvl(InsDvlArgs),
 }
 
 #[derive(Debug, Args)]
@@ -47,17 +47,42 @@ pub(crate) struct PlazaArgs {
     pub(crate) seed: Option<String>,
 }
 
+/// `fathom replay range-beacon`.
 #[derive(Debug, Args)]
-pub(crate) struct OwnArgs {
-    /// The log folder (`log.toml` and the CSV files); default: the settings' `[data]
-    /// dir` (`fathom-out/<kind>-log`, where `fathom log example <kind>` writes).
+pub(crate) struct RangeBeaconArgs {
+    /// The range-beacon log folder (`log.toml`, `beacons.csv`, `initial.csv`,
+    /// `ranges.csv`, the motion as `odometry.csv` or `dvl.csv` + `heading.csv`, optional
+    /// `depth.csv` and `truth.csv`; docs/own-data.md); default: the settings' `[data] dir`
+    /// (the repository's example log `data/logs/range-beacon-example`; `fathom log
+    /// example range-beacon` and `fathom log from-plaza` write logs of this kind).
     pub(crate) dir: Option<PathBuf>,
-    /// Settings and methods (TOML, the schema of `scenarios/range-beacon.toml` or
-    /// `scenarios/ins-dvl.toml`); default: built in.
+    /// Settings and methods (TOML, the schema of `scenarios/range-beacon.toml`: range
+    /// noise, gating, the AS / SC / SI schemes); default: built in.
     #[arg(long, value_name = "FILE")]
     pub(crate) config: Option<PathBuf>,
-    /// Output folder (default `fathom-out/range-beacon-replay` /
-    /// `fathom-out/ins-dvl-replay`).
+    /// Output folder (default `fathom-out/range-beacon-replay`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
+}
+
+/// `fathom replay ins-dvl`.
+#[derive(Debug, Args)]
+pub(crate) struct InsDvlArgs {
+    /// The INS / DVL log folder (`log.toml`, `initial.csv`, `imu.csv`, `dvl.csv`,
+    /// optional `depth.csv`, `altitude.csv`, `rpm.csv` and `truth.csv`;
+    /// docs/own-data.md); default: the settings' `[data] dir`
+    /// (the repository's example log `data/logs/ins-dvl-example`; `fathom log example
+    /// ins-dvl` writes logs of this kind).
+    pub(crate) dir: Option<PathBuf>,
+    /// Settings and methods (TOML, the schema of `scenarios/ins-dvl.toml`: sensor
+    /// noise, the INS-DVL and RPM velocity filters); default: built in.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) config: Option<PathBuf>,
+    /// Output folder (default `fathom-out/ins-dvl-replay`).
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
     /// Write into a folder holding files fathom did not write (they are kept; only
@@ -100,19 +125,38 @@ pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
                 force: a.force,
             }
         }
-        ReplayData::RangeBeacon(a) => own(&RangeBeacon, a),
-        ReplayData::InsDvl(a) => own(&InsDvl, a),
+        ReplayData::RangeBeacon(a) => own(
+            &RangeBeacon,
+            a.dir.as_deref(),
+            a.config.as_deref(),
+            &a.out,
+            a.force,
+        ),
+        ReplayData::InsDvl(a) => own(
+            &InsDvl,
+            a.dir.as_deref(),
+            a.config.as_deref(),
+            &a.out,
+            a.force,
+        ),
     };
     replay(&request)
 }
 
-fn own<'a>(exp: &'static dyn DynExperiment, a: &'a OwnArgs) -> Request<'a> {
+/// The request of an own-log replay (`dir`, `config`, `out`, `force` as given).
+fn own<'a>(
+    exp: &'static dyn DynExperiment,
+    dir: Option<&'a Path>,
+    config: Option<&'a Path>,
+    out: &Option<PathBuf>,
+    force: bool,
+) -> Request<'a> {
     Request {
         exp,
-        dir: a.dir.as_deref(),
-        config: a.config.as_deref(),
-        out: a.out.clone().unwrap_or_else(|| replay_out(exp)),
-        force: a.force,
+        dir,
+        config,
+        out: out.clone().unwrap_or_else(|| replay_out(exp)),
+        force,
     }
 }
 

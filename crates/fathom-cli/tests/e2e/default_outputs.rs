@@ -94,8 +94,7 @@ fn logs_and_their_replays_write_into_fathom_out() {
         let log = format!("fathom-out/{kind}-log");
         assert!(r.stdout.contains(&log), "{}", r.stdout);
         assert!(root.join(&log).join("log.toml").is_file(), "{log}");
-        // Without a folder, the replay reads the settings' `[data] dir`: the example.
-        let r = ok(&root, &["replay", kind]);
+        let r = ok(&root, &["replay", kind, &log]);
         assert!(r.stdout.contains(&log), "{}", r.stdout);
         let out = root.join(format!("fathom-out/{kind}-replay"));
         assert!(out.join("summary.json").is_file(), "{}", out.display());

@@ -556,3 +556,83 @@ fn every_replay_writes_the_outputs_of_a_run() {
         summary(&root.join("o-rb")).rows
     );
 }
+
+/// The example logs the repository keeps in `data/logs` (which the replay presets read)
+/// are exactly what their commands write (`data/logs/README.md`): regenerated into a
+/// scratch copy of the repository's layout and compared file by file.
+#[test]
+fn the_repository_logs_are_what_the_commands_write() {
+    let root = scratch("own-logs-repository");
+    let plaza = root.join("data/plaza1");
+    std::fs::create_dir_all(&plaza).unwrap();
+    for f in ["Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat"] {
+        std::fs::copy(repo_root().join("data/plaza1").join(f), plaza.join(f)).unwrap();
+    }
+    let commands: [(&str, &[&str]); 3] = [
+        (
+            "range-beacon-example",
+            &[
+                "log",
+                "example",
+                "range-beacon",
+                "--out",
+                "data/logs/range-beacon-example",
+            ],
+        ),
+        (
+            "ins-dvl-example",
+            &[
+                "log",
+                "example",
+                "ins-dvl",
+                "--duration",
+                "60",
+                "--out",
+                "data/logs/ins-dvl-example",
+            ],
+        ),
+        (
+            "plaza1-range-beacon",
+            &[
+                "log",
+                "from-plaza",
+                "data/plaza1",
+                "--out",
+                "data/logs/plaza1-range-beacon",
+            ],
+        ),
+    ];
+    for (name, args) in commands {
+        ok(&root, args);
+        let kept = repo_root().join("data/logs").join(name);
+        let made = root.join("data/logs").join(name);
+        let files = |d: &Path| -> Vec<String> {
+            let mut v: Vec<String> = std::fs::read_dir(d)
+                .unwrap()
+                .flatten()
+                .map(|e| e.file_name().to_string_lossy().into_owned())
+                .collect();
+            v.sort();
+            v
+        };
+        assert_eq!(files(&kept), files(&made), "{name}: file set");
+        for f in files(&made) {
+            assert!(
+                std::fs::read(kept.join(&f)).unwrap() == std::fs::read(made.join(&f)).unwrap(),
+                "data/logs/{name}/{f} differs from what `fathom {}` writes: write it again \
+                 with that command (data/logs/README.md)",
+                args.join(" ")
+            );
+        }
+    }
+    // And a fresh clone's replays read them without a folder.
+    for kind in ["range-beacon", "ins-dvl"] {
+        let r = fathom(&root, &["replay", kind]);
+        assert_eq!(r.code, 0, "{kind}: {r:?}");
+        assert!(
+            r.stdout.contains(&format!("data/logs/{kind}-example")),
+            "{}",
+            r.stdout
+        );
+    }
+}
