@@ -205,20 +205,21 @@ class World:
     @staticmethod
     def from_obj(
         path: Union[str, "os.PathLike[str]"],
-        axes: str = "enu",
+        axes: str = "enu_z_up",
         scale: float = 1.0,
         origin_offset: Tuple[float, float, float] = (0.0, 0.0, 0.0),
         materials: Optional[Mapping[str, Union[str, int]]] = None,
         default_material: Optional[str] = "opaque",
     ) -> "World":
-        """Read an OBJ file. ``axes``: the file's axes, ``"enu"`` (default), ``"ned"``,
-        ``"y_up_rh"`` or ``"y_up_lh"``; ``scale``: metres per file unit;
+        """Read an OBJ file. ``axes``: the file's axes as a scenario's ``world.axes``
+        names them, ``"enu_z_up"`` (default), ``"ned"``, ``"y_up_right_handed"`` or
+        ``"y_up_left_handed"`` (short forms ``"enu"``, ``"y_up_rh"``, ``"y_up_lh"``); ``scale``: metres per file unit;
         ``origin_offset``: subtracted first (file axes and units); ``materials``:
         ``usemtl`` name -> ``"opaque"``, ``"glass"`` or a code."""
     @staticmethod
     def from_stl(
         path: Union[str, "os.PathLike[str]"],
-        axes: str = "enu",
+        axes: str = "enu_z_up",
         scale: float = 1.0,
         origin_offset: Tuple[float, float, float] = (0.0, 0.0, 0.0),
         material: Union[str, int, None] = None,

@@ -78,7 +78,7 @@ fn latency_points(ms: &[f64]) -> Vec<(f64, f64)> {
         .collect()
 }
 
-/// The tail of the latencies `ms` as the file `name`: the fraction of solutions later
+/// The tail of the latencies `ms` as the file `name`: the fraction of answers later
 /// than `x`, on a log10 axis (the histogram hides the rare long ones); nothing for
 /// none.
 fn latency_tail(
@@ -91,9 +91,9 @@ fn latency_tail(
         return Ok(None);
     }
     let plot = LinePlot::new(
-        format!("{title} ({} solutions)", pts.len() + 1),
+        format!("{title} ({} answers)", pts.len() + 1),
         "latency x (ms)",
-        "log10 fraction of solutions later than x",
+        "log10 fraction of answers later than x",
     )
     .with_series(Series::new("latency", pts));
     svg(name, &plot).map(Some)
@@ -111,7 +111,7 @@ fn latency_histogram(
     let counts =
         fathom_stats::Histogram::new(ms, LATENCY_BINS).map_err(|e| PilsError::model(name, e))?;
     let plot = Histogram::new(
-        format!("{title} ({} solutions)", ms.len()),
+        format!("{title} ({} answers)", ms.len()),
         "latency (ms)",
         "count",
         counts.edges,
@@ -215,7 +215,7 @@ mod tests {
             "{}",
             files[0].1
         );
-        assert!(files[1].1.contains("3 solutions"), "{}", files[1].1);
+        assert!(files[1].1.contains("3 answers"), "{}", files[1].1);
         assert!(session_figures(&SimSeries::default()).unwrap().is_empty());
 
         let c = Comparison::new(vec![pair(4, 1.0, 1.1), pair(5, 2.0, 2.2)], 0).unwrap();

@@ -77,7 +77,9 @@ fn axes_arg(axes: &str) -> PyResult<AxisConvention> {
         "y_up_rh" | "y_up_right_handed" => Ok(AxisConvention::YUpRightHanded),
         "y_up_lh" | "y_up_left_handed" => Ok(AxisConvention::YUpLeftHanded),
         _ => Err(PyValueError::new_err(format!(
-            "axes {axes:?}: expected \"ned\", \"enu\", \"y_up_rh\" or \"y_up_lh\""
+            "axes {axes:?}: expected \"ned\", \"enu_z_up\", \"y_up_right_handed\" or \
+             \"y_up_left_handed\" (the names of a scenario's `world.axes`; short forms \
+             \"enu\", \"y_up_rh\", \"y_up_lh\")"
         ))),
     }
 }
@@ -207,15 +209,17 @@ fn settings(
 impl World {
     /// Reads a Wavefront OBJ file into local NED metres.
     ///
-    /// `axes`: the file's axes, `"enu"` (x east, y north, z up; default), `"ned"`,
-    /// `"y_up_rh"` (Blender/glTF) or `"y_up_lh"` (Unity); `scale`: metres per file
+    /// `axes`: the file's axes, as a scenario's `world.axes` names them:
+    /// `"enu_z_up"` (x east, y north, z up; default), `"ned"`, `"y_up_right_handed"`
+    /// (Blender/glTF) or `"y_up_left_handed"` (Unity); the short forms `"enu"`,
+    /// `"y_up_rh"`, `"y_up_lh"` are accepted too; `scale`: metres per file
     /// unit; `origin_offset`: subtracted from every file point first (file axes and
     /// units); `materials`: `usemtl` name -> `"opaque"`, `"glass"` or a material code
     /// (the names `opaque` and `glass` are always known; an unknown name is an
     /// error); `default_material`: the material of faces before any `usemtl` (`None`:
     /// such faces are an error).
     #[staticmethod]
-    #[pyo3(signature = (path, axes="enu", scale=1.0, origin_offset=(0.0, 0.0, 0.0), materials=None, default_material=Some("opaque".to_string())))]
+    #[pyo3(signature = (path, axes="enu_z_up", scale=1.0, origin_offset=(0.0, 0.0, 0.0), materials=None, default_material=Some("opaque".to_string())))]
     fn from_obj(
         py: Python<'_>,
         path: PathBuf,
@@ -252,7 +256,7 @@ impl World {
     /// Reads a binary or ASCII STL file into local NED metres (`axes`, `scale`,
     /// `origin_offset` as for `from_obj`); every face has `material`.
     #[staticmethod]
-    #[pyo3(signature = (path, axes="enu", scale=1.0, origin_offset=(0.0, 0.0, 0.0), material=None))]
+    #[pyo3(signature = (path, axes="enu_z_up", scale=1.0, origin_offset=(0.0, 0.0, 0.0), material=None))]
     fn from_stl(
         py: Python<'_>,
         path: PathBuf,
