@@ -20,6 +20,9 @@ use px4_ulog::stream_parser::model::{DataMessage, FlattenedFieldType};
 
 use super::error::UlogError;
 
+/// Length of the ULog file header (magic, version, time stamp), bytes.
+const HEADER_BYTES: u64 = 16;
+
 /// Bytes read and fed to the parser at a time.
 pub const CHUNK_BYTES: usize = 64 * 1024;
 
@@ -290,9 +293,11 @@ pub fn stream_topics(
                 what: "header",
             });
         }
+        // the 16-byte file header is judged whole: an error inside it names all of it
+        let start = if pos < HEADER_BYTES { 0 } else { pos };
         parser
             .consume_bytes(&buf[..n])
-            .map_err(|e| malformed(pos, pos + 1, e))?;
+            .map_err(|e| malformed(start, pos + 1, e))?;
         pos += 1;
     }
     let mut sections: Vec<u64> = parser

@@ -98,7 +98,11 @@ fn broken_logs_are_errors_not_panics() {
     bad_magic[0] = b'X';
     assert!(matches!(
         convert_bytes(&bad_magic, p).unwrap_err(),
-        UlogError::Malformed { .. }
+        UlogError::Malformed {
+            start: 0,
+            end: 16,
+            ..
+        }
     ));
     // single bit flips spread over the file: an error or a log, never a panic
     let mut errors = 0;
