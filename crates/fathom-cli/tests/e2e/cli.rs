@@ -92,10 +92,20 @@ fn every_settings_file_under_scenarios_checks_ok() {
     for f in ["Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat"] {
         std::fs::copy(repo_root().join("data/plaza1").join(f), data.join(f)).unwrap();
     }
+    let flight = repo_root().join("data/ulog/fmu_v3_gps.ulg");
+    let flight = flight.to_str().unwrap();
     for args in [
         &["log", "example", "range-beacon"][..],
         &["log", "example", "ins-dvl"],
         &["log", "from-plaza"],
+        // the log `scenarios/gnss-ins.toml` reads
+        &[
+            "log",
+            "from-ulog",
+            flight,
+            "--out",
+            "fathom-out/gnss-ins-log",
+        ],
     ] {
         let r = fathom(&root, args);
         assert_eq!(r.code, 0, "{args:?}: {r:?}");
