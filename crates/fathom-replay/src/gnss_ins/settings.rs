@@ -335,3 +335,36 @@ pub fn parse_settings(text: &str, file: &str) -> Result<GnssInsSettings, SimErro
     let toml: GnssInsToml = fathom_sim::scenario::parse_toml(text, file)?;
     toml.check(file)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::own_log::GNSS_INS_PRESET;
+
+    #[test]
+    fn the_preset_checks_and_bad_values_name_their_key() {
+        let s = parse_settings(GNSS_INS_PRESET, "p.toml").unwrap();
+        assert_eq!(s.methods.len(), 3);
+        assert!(s.outages.is_empty() && !s.in_outage(5.0));
+        let with_outage = GNSS_INS_PRESET.replace(
+            "gate_probability = 0.9999\n",
+            "gate_probability = 0.9999\n[[gnss.outages]]\nstart_s = 10.0\nend_s = 30.0\n",
+        );
+        let s = parse_settings(&with_outage, "p.toml").unwrap();
+        assert!(s.in_outage(10.0) && s.in_outage(29.9) && !s.in_outage(30.0) && !s.in_outage(9.9));
+        let e = |text: String| parse_settings(&text, "p.toml").unwrap_err().to_string();
+        let backwards = with_outage.replace("end_s = 30.0", "end_s = 5.0");
+        assert!(e(backwards).contains("gnss.outages[0].end_s"));
+        let unknown = GNSS_INS_PRESET.replace(
+            "use_velocity = true",
+            "use_velocity = true\nlatency_s = 0.1",
+        );
+        assert!(e(unknown).contains("latency_s"));
+        let gate = GNSS_INS_PRESET.replace("gate_probability = 0.9999", "gate_probability = 1.0");
+        assert!(e(gate).contains("gnss.gate_probability"));
+        let fix = GNSS_INS_PRESET.replace("min_fix_type = 3", "min_fix_type = 9");
+        assert!(e(fix).contains("gnss.min_fix_type"));
+        let sigma = GNSS_INS_PRESET.replace("sigma_att_rad = 0.05", "sigma_att_rad = 0.0");
+        assert!(e(sigma).contains("initial.sigma_att_rad"));
+    }
+}
