@@ -3,12 +3,15 @@
 //! message of a requested topic (instance 0) is decoded into `f64`s and handed to a
 //! sink, and nothing else is kept; a 1 GB log is never held in memory.
 //!
+//! The framing is fathom's: after the 16-byte header, each message (`u16` size,
+//! type, payload) is cut from the stream, checked for what `px4-ulog` 0.6.1 indexes
+//! without checking (`check_message`: fuzzing found panics there), and fed to the
+//! parser alone; a panic the check does not foresee is caught and becomes an error.
 //! Strict where the `px4-ulog` drivers are lenient: a file that ends inside a message
 //! ([`UlogError::Truncated`]) or holds a message that does not decode
-//! ([`UlogError::Malformed`], with the byte range of the chunk) is an error, not a
+//! ([`UlogError::Malformed`], with the message's byte range) is an error, not a
 //! shorter flight. Appended-data sections (the `FlagBits` offsets) are read in file
-//! order, the parser's partial message dropped at each section start, as PX4's
-//! readers do.
+//! order, a message cut by a section start dropped, as PX4's readers do.
 
 use std::cell::Cell;
 use std::collections::HashMap;
@@ -267,84 +270,138 @@ pub fn stream_topics(
     let mut on_data = |m: &DataMessage<'_>| state.on_data(m);
     let mut parser = LogParser::default();
     parser.set_data_message_callback(&mut on_data);
-    let mut buf = vec![0u8; CHUNK_BYTES];
-    let mut pos: u64 = 0;
-    let malformed = |start: u64, end: u64, e: px4_ulog::stream_parser::model::UlogParseError| {
-        UlogError::Malformed {
-            path: path.to_path_buf(),
-            start,
-            end,
-            reason: e.description,
-        }
+    let malformed = |start: u64, end: u64, reason: String| UlogError::Malformed {
+        path: path.to_path_buf(),
+        start,
+        end,
+        reason,
     };
-    // The header and the FlagBits message byte by byte, so that no data byte is fed
-    // before the appended-data offsets are known.
-    while !parser.header_complete() {
-        let n = read_some(&mut reader, &mut buf[..1]).map_err(io)?;
+    // The 16-byte file header, then one whole message at a time (own framing: each
+    // message is checked by `check_message` before the parser sees it).
+    let mut header = [0u8; HEADER_BYTES as usize];
+    let mut got = 0;
+    while got < header.len() {
+        let n = read_some(&mut reader, &mut header[got..]).map_err(io)?;
         if n == 0 {
-            if pos == 0 {
-                return Err(UlogError::Empty {
+            return Err(if got == 0 {
+                UlogError::Empty {
                     path: path.to_path_buf(),
-                });
-            }
-            return Err(UlogError::Truncated {
-                path: path.to_path_buf(),
-                len: pos,
-                what: "header",
+                }
+            } else {
+                UlogError::Truncated {
+                    path: path.to_path_buf(),
+                    len: got as u64,
+                    what: "header",
+                }
             });
         }
-        // the 16-byte file header is judged whole: an error inside it names all of it
-        let start = if pos < HEADER_BYTES { 0 } else { pos };
-        parser
-            .consume_bytes(&buf[..n])
-            .map_err(|e| malformed(start, pos + 1, e))?;
-        pos += 1;
+        got += n;
     }
-    let mut sections: Vec<u64> = parser
-        .appended_offsets()
-        .iter()
-        .copied()
-        .filter(|&o| o > pos)
-        .collect();
-    sections.sort_unstable();
-    sections.reverse();
+    feed(&mut parser, &header).map_err(|r| malformed(0, HEADER_BYTES, r))?;
+    let mut pos: u64 = HEADER_BYTES; // file offset of buf[start]
+    let mut buf: Vec<u8> = Vec::with_capacity(2 * CHUNK_BYTES);
+    let mut start = 0usize;
+    let mut chunk = vec![0u8; CHUNK_BYTES];
+    // appended-data section starts ahead, the nearest last (known after FlagBits)
+    let mut sections: Option<Vec<u64>> = None;
+    let mut eof = false;
     loop {
-        let until = sections.last().copied();
-        let max = match until {
-            Some(end) => usize::try_from(end - pos).map_or(CHUNK_BYTES, |d| d.min(CHUNK_BYTES)),
-            None => CHUNK_BYTES,
-        };
-        if max == 0 {
-            // at a section start: a message cut by the appended data is dropped
-            parser.clear_leftover();
-            sections.pop();
-            continue;
+        let avail = &buf[start..];
+        if avail.len() >= 3 {
+            let total = 3 + usize::from(u16::from_le_bytes([avail[0], avail[1]]));
+            if avail.len() >= total {
+                let end = pos + total as u64;
+                let next = sections.as_ref().and_then(|s| s.last().copied());
+                if let Some(b) = next
+                    && b < end
+                {
+                    // a message cut by an appended section: drop its head
+                    let skip = usize::try_from(b.saturating_sub(pos)).unwrap_or(total);
+                    start += skip;
+                    pos += skip as u64;
+                    if let Some(s) = sections.as_mut() {
+                        s.pop();
+                    }
+                    continue;
+                }
+                let msg = &avail[..total];
+                check_message(msg).map_err(|r| malformed(pos, end, r))?;
+                feed(&mut parser, msg).map_err(|r| malformed(pos, end, r))?;
+                start += total;
+                pos = end;
+                if failed.get() {
+                    break;
+                }
+                if sections.is_none() && parser.header_complete() {
+                    let mut s: Vec<u64> = parser
+                        .appended_offsets()
+                        .iter()
+                        .copied()
+                        .filter(|&o| o > pos)
+                        .collect();
+                    s.sort_unstable_by(|a, b| b.cmp(a));
+                    sections = Some(s);
+                }
+                continue;
+            }
         }
-        let n = read_some(&mut reader, &mut buf[..max]).map_err(io)?;
+        if eof {
+            break;
+        }
+        buf.drain(..start);
+        start = 0;
+        let n = read_some(&mut reader, &mut chunk).map_err(io)?;
         if n == 0 {
-            break;
-        }
-        parser
-            .consume_bytes(&buf[..n])
-            .map_err(|e| malformed(pos, pos + n as u64, e))?;
-        pos += n as u64;
-        if failed.get() {
-            break;
+            eof = true;
+        } else {
+            buf.extend_from_slice(&chunk[..n]);
         }
     }
-    let truncated = parser.has_leftover();
+    let leftover = (buf.len() - start) as u64;
     drop(parser);
     if let Some(e) = state.error {
         return Err(e);
     }
-    if truncated {
+    if leftover > 0 {
         return Err(UlogError::Truncated {
             path: path.to_path_buf(),
-            len: pos,
+            len: pos + leftover,
             what: "message",
         });
     }
     Ok(pos)
+}
+
+/// Feeds `bytes` (the header, or exactly one message) to the parser; a panic inside
+/// the parser (a malformed message `check_message` does not know) is caught and
+/// returned as an error, so that no input crashes fathom.
+fn feed(parser: &mut LogParser<'_>, bytes: &[u8]) -> Result<(), String> {
+    match std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| parser.consume_bytes(bytes))) {
+        Ok(Ok(())) => Ok(()),
+        Ok(Err(e)) => Err(e.description),
+        Err(_) => Err("the ULog parser failed on this message".into()),
+    }
+}
+
+/// Checks what `px4-ulog` 0.6.1 indexes without checking (found by fuzzing: it
+/// panicked on them): a parameter message's key length within the message, an
+/// add-logged message of at least 3 bytes.
+fn check_message(msg: &[u8]) -> Result<(), String> {
+    let payload = &msg[3..];
+    match msg[2] {
+        b'P' => match payload.first() {
+            Some(&k) if payload.len() > usize::from(k) => Ok(()),
+            _ => Err(format!(
+                "parameter message of {} bytes shorter than its key length",
+                payload.len()
+            )),
+        },
+        b'A' if payload.len() < 3 => Err(format!(
+            "add-logged message of {} bytes, fewer than 3",
+            payload.len()
+        )),
+        _ => Ok(()),
+    }
 }
 
 /// `read` retried on `Interrupted`.

@@ -113,3 +113,26 @@ fn broken_logs_are_errors_not_panics() {
     }
     assert!(errors > 0);
 }
+
+/// Inputs on which `px4-ulog` 0.6.1 panicked (found by a mutation run over the logs of
+/// `data/ulog`): a parameter message whose key length runs past its end. They are
+/// errors naming the message's bytes.
+#[test]
+fn messages_the_parser_would_panic_on_are_errors() {
+    let mut header = b"ULog\x01\x12\x35".to_vec();
+    header.extend([1u8]); // version
+    header.extend(0u64.to_le_bytes()); // time stamp
+    let mut bytes = header.clone();
+    bytes.extend([1u8, 0, b'P', 200]); // size 1, key length 200
+    let e = convert_bytes(&bytes, Path::new("p.ulg")).unwrap_err();
+    assert!(
+        matches!(&e, UlogError::Malformed { start: 16, end: 20, reason, .. } if reason.contains("key length")),
+        "{e}"
+    );
+    let mut empty_param = header;
+    empty_param.extend([0u8, 0, b'P']);
+    assert!(matches!(
+        convert_bytes(&empty_param, Path::new("p.ulg")).unwrap_err(),
+        UlogError::Malformed { .. }
+    ));
+}
