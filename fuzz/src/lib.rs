@@ -11,6 +11,8 @@
 //! beside each regression input.
 
 use fathom_core::{Material, RayCaster};
+use fathom_data::layout::gnss_ins::GnssInsLog;
+use fathom_data::layout::{FileSet, LogKind, Manifest};
 use fathom_data::matv5::mat_v5_bytes;
 use fathom_data::plaza::{
     BeaconSite, PlazaMat, RangeOrder, parse_mat, parse_odometry, parse_ranges,
@@ -499,4 +501,60 @@ pub fn map_obj(data: &[u8]) -> Vec<String> {
 /// an accepted mesh is checked as [`check_mesh`] says.
 pub fn map_stl(data: &[u8]) -> Vec<String> {
     check_mesh("fuzz.stl", stl::parse_stl(data, &mesh_settings()))
+}
+
+/// Target `ulog`: the bytes as a PX4 ULog converted into a `gnss-ins` log
+/// ([`fathom_data::ulog::convert_bytes`], the streaming reader fed from memory). An
+/// error must be one line; an accepted log must have strictly increasing, finite time
+/// stamps and finite values in every file, and its CSV files must read back to the
+/// same log.
+pub fn ulog(data: &[u8]) -> Vec<String> {
+    match fathom_data::ulog::convert_bytes(data, std::path::Path::new("fuzz.ulg")) {
+        Err(e) => {
+            let text = e.to_string();
+            assert_eq!(text.lines().count(), 1, "a ULog error is one line: {text}");
+            vec![text]
+        }
+        Ok(c) => {
+            let log = &c.log;
+            let times = [
+                log.imu.iter().map(|r| r.time).collect::<Vec<_>>(),
+                log.gnss.iter().map(|r| r.time).collect(),
+            ];
+            for t in &times {
+                assert!(t.iter().all(|x| x.is_finite()));
+                assert!(t.windows(2).all(|w| w[1] > w[0]), "times must increase");
+            }
+            for r in &log.imu {
+                assert!(
+                    r.gyro_in_body
+                        .iter()
+                        .chain(&r.accel_in_body)
+                        .all(|x| x.is_finite())
+                );
+            }
+            let files = log.to_files();
+            let set = FileSet {
+                dir: "fuzz".into(),
+                manifest: Manifest::new(LogKind::GnssIns, ""),
+                files: files
+                    .iter()
+                    .map(|(n, t)| (*n, t.as_bytes().to_vec()))
+                    .collect(),
+            };
+            // values beyond the layout's plausibility bounds are refused on reading
+            // back (one line); what reads back must be the same log
+            match GnssInsLog::parse(&set) {
+                Ok(back) => assert_eq!(&back, log, "CSV round trip changed the log"),
+                Err(e) => assert_eq!(e.to_string().lines().count(), 1),
+            }
+            vec![format!(
+                "ok: {} IMU rows, {} GNSS rows, reference {}, truth {}",
+                log.imu.len(),
+                log.gnss.len(),
+                log.reference.as_ref().map_or(0, Vec::len),
+                log.truth.as_ref().map_or(0, Vec::len)
+            )]
+        }
+    }
 }

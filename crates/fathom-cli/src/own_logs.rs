@@ -1,11 +1,13 @@
-//! `fathom log example|from-plaza|check`: the commands that write and check logs in
-//! fathom's CSV layout (`fathom replay range-beacon|ins-dvl` replays them, `replay.rs`).
+//! `fathom log example|from-plaza|from-ulog|check`: the commands that write and check
+//! logs in fathom's CSV layout (`fathom replay range-beacon|ins-dvl|gnss-ins` replays
+//! them, `replay.rs`).
 
 use std::path::PathBuf;
 
 use anyhow::anyhow;
 use clap::{Args, Subcommand};
 use fathom_data::layout::convert::range_beacon_from_plaza;
+use fathom_data::layout::gnss_ins::GnssInsLog;
 use fathom_data::layout::ins_dvl::InsDvlLog;
 use fathom_data::layout::range_beacon::RangeBeaconLog;
 use fathom_data::layout::{FileSet, LogKind, Manifest, write_log};
@@ -18,7 +20,7 @@ use fathom_sim::{Experiment, error_chain};
 
 use crate::Failure;
 
-/// The two kinds of log.
+/// The kinds of log `fathom log example` writes.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum KindArg {
     /// Range-beacon localization.
@@ -43,8 +45,32 @@ pub(crate) enum LogCmd {
     /// Convert a CMU Plaza data set (`*_DR.txt`, `*_TD.txt`, `*_.mat`) into a
     /// range-beacon log.
     FromPlaza(FromPlazaArgs),
+    /// Convert a PX4 ULog flight log (`*.ulg`) into a gnss-ins log (IMU, GNSS,
+    /// baro, magnetometer, range sensor; PX4's EKF2 estimate as a reference track;
+    /// the simulator's ground truth when the log has it).
+    FromUlog(FromUlogArgs),
     /// Read every file of a log folder and report the first error (file, line, column).
     Check(LogCheckArgs),
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct FromUlogArgs {
+    /// The ULog file.
+    pub(crate) file: PathBuf,
+    /// The new log folder, which must not hold a log (default
+    /// `fathom-out/<file stem>-log`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+}
+
+/// The default folder of the log converted from `file`: `fathom-out/<stem>-log`.
+pub(crate) fn ulog_out(file: &std::path::Path) -> PathBuf {
+    let stem = file
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .filter(|s| !s.is_empty())
+        .unwrap_or_else(|| "ulog".into());
+    log_out(&stem)
 }
 
 #[derive(Debug, Args)]
@@ -110,8 +136,8 @@ pub(crate) fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
         LogCmd::Example(a) => {
             let kind = a.kind.kind();
             let dir = a.out.clone().unwrap_or_else(|| log_out(kind.name()));
-            let (files, outliers) = match kind {
-                LogKind::RangeBeacon => {
+            let (files, outliers) = match a.kind {
+                KindArg::RangeBeacon => {
                     let ex = range_beacon_example(a.duration, a.seed, !a.no_truth)
                         .map_err(|e| usage(&e))?;
                     let note = format!(
@@ -122,7 +148,7 @@ pub(crate) fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
                     );
                     (ex.log.to_files(), note)
                 }
-                LogKind::InsDvl => (
+                KindArg::InsDvl => (
                     ins_dvl_example(a.duration, a.seed, !a.no_truth)
                         .map_err(|e| usage(&e))?
                         .to_files(),
@@ -185,6 +211,32 @@ pub(crate) fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
                 dir.display()
             ))
         }
+        LogCmd::FromUlog(a) => {
+            let c = fathom_data::ulog::convert_file(&a.file).map_err(|e| usage(&e))?;
+            let dir = a.out.clone().unwrap_or_else(|| ulog_out(&a.file));
+            let files = c.log.to_files();
+            write_log(
+                &dir,
+                &Manifest::new(LogKind::GnssIns, c.description(&a.file)),
+                &files,
+            )
+            .map_err(|e| usage(&e))?;
+            Ok(format!(
+                "wrote the gnss-ins log {} ({}; {} IMU rows, {} GNSS rows, EKF2 reference: {}, \
+                 truth: {}); replay it with `fathom replay gnss-ins {}`\n",
+                dir.display(),
+                files.iter().map(|f| f.0).collect::<Vec<_>>().join(", "),
+                c.log.imu.len(),
+                c.log.gnss.len(),
+                if c.log.reference.is_some() {
+                    "yes"
+                } else {
+                    "no"
+                },
+                if c.log.truth.is_some() { "yes" } else { "no" },
+                dir.display()
+            ))
+        }
         LogCmd::Check(a) => {
             let set = FileSet::read_dir(&a.dir).map_err(|e| usage(&e))?;
             let kind = set.manifest.kind;
@@ -196,6 +248,10 @@ pub(crate) fn log_cmd(cmd: &LogCmd) -> Result<String, Failure> {
                 LogKind::InsDvl => {
                     let l = InsDvlLog::parse(&set).map_err(|e| usage(&e))?;
                     format!("{} IMU rows, {} DVL rows", l.imu.len(), l.dvl.len())
+                }
+                LogKind::GnssIns => {
+                    let l = GnssInsLog::parse(&set).map_err(|e| usage(&e))?;
+                    format!("{} IMU rows, {} GNSS rows", l.imu.len(), l.gnss.len())
                 }
             };
             Ok(format!(

@@ -1,4 +1,5 @@
-//! `fathom replay plaza|range-beacon|ins-dvl [DIR]`: a replay on recorded data, run as
+//! `fathom replay plaza|range-beacon|ins-dvl|gnss-ins [DIR]` and `fathom replay ulog
+//! FILE.ulg` (the `gnss-ins` replay of a PX4 ULog converted in memory): a replay on recorded data, run as
 //! a job of the driver like `fathom run` (the settings checked first, their `[data]
 //! dir` replaced by `DIR` if given, then `fathom_sim::driver::execute_to` with command
 //! `replay`), printed as `fathom run` prints: every row with its unit, then the checks
@@ -9,6 +10,7 @@ use std::path::{Path, PathBuf};
 use anyhow::{Context, anyhow};
 use clap::{Args, Subcommand};
 use fathom_experiments::plaza::Plaza;
+use fathom_replay::gnss_ins::GnssIns;
 use fathom_replay::ins_dvl::InsDvl;
 use fathom_replay::range_beacon::RangeBeacon;
 use fathom_sim::driver::{WriteOptions, console_claims, console_rows, console_setup, execute_to};
@@ -24,6 +26,29 @@ pub(crate) enum ReplayData {
     RangeBeacon(RangeBeaconArgs),
     /// Your own INS / DVL log (fathom's CSV layout, docs/own-data.md).
     InsDvl(InsDvlArgs),
+    /// A drone flight as a gnss-ins log (`fathom log from-ulog`): INS, GPS/INS with
+    /// the 12- and 15-state filters, against PX4's EKF2 (and the truth in SITL).
+    GnssIns(GnssInsArgs),
+    /// A PX4 ULog flight log, converted in memory as `fathom log from-ulog` converts
+    /// it, then replayed as `replay gnss-ins` replays the converted folder.
+    Ulog(UlogArgs),
+}
+
+#[derive(Debug, Args)]
+pub(crate) struct UlogArgs {
+    /// The ULog file (`*.ulg`).
+    pub(crate) file: PathBuf,
+    /// Settings and methods (TOML, the schema of `scenarios/gnss-ins.toml`); default:
+    /// built in.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) config: Option<PathBuf>,
+    /// Output folder (default `fathom-out/gnss-ins-replay`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
 }
 
 #[derive(Debug, Args)]
@@ -91,6 +116,27 @@ pub(crate) struct InsDvlArgs {
     pub(crate) force: bool,
 }
 
+/// `fathom replay gnss-ins`.
+#[derive(Debug, Args)]
+pub(crate) struct GnssInsArgs {
+    /// The gnss-ins log folder (`log.toml`, `imu.csv`, `gnss.csv`, `reference.csv`,
+    /// optional `baro.csv`, `mag.csv`, `range.csv` and `truth.csv`; `fathom log from-ulog` writes
+    /// one; docs/own-data.md); default: the settings' `[data] dir` (the repository's
+    /// `data/logs/gnss-ins-sitl`, a PX4 SITL flight converted from `data/ulog`).
+    pub(crate) dir: Option<PathBuf>,
+    /// Settings and methods (TOML, the schema of `scenarios/gnss-ins.toml`: IMU noise,
+    /// GNSS floors and outages, the filters); default: built in.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) config: Option<PathBuf>,
+    /// Output folder (default `fathom-out/gnss-ins-replay`).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
+}
+
 /// What one replay command asks for.
 struct Request<'a> {
     exp: &'static dyn DynExperiment,
@@ -139,6 +185,28 @@ pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
             &a.out,
             a.force,
         ),
+        ReplayData::GnssIns(a) => own(
+            &GnssIns,
+            a.dir.as_deref(),
+            a.config.as_deref(),
+            &a.out,
+            a.force,
+        ),
+        ReplayData::Ulog(a) => {
+            if !a.file.is_file() {
+                return Err(Failure::Usage(anyhow!(
+                    "cannot read the ULog `{}`: not a file",
+                    a.file.display()
+                )));
+            }
+            Request {
+                exp: &GnssIns,
+                dir: Some(a.file.as_path()),
+                config: a.config.as_deref(),
+                out: a.out.clone().unwrap_or_else(|| replay_out(&GnssIns)),
+                force: a.force,
+            }
+        }
     };
     replay(&request)
 }
@@ -277,7 +345,12 @@ mod tests {
 
     #[test]
     fn built_in_settings_parse_and_bad_settings_are_usage_errors() {
-        for exp in [&Plaza as &dyn DynExperiment, &RangeBeacon, &InsDvl] {
+        for exp in [
+            &Plaza as &dyn DynExperiment,
+            &RangeBeacon,
+            &InsDvl,
+            &GnssIns,
+        ] {
             assert!(load_settings(exp, None).is_ok(), "{}", exp.name());
         }
         let dir = std::env::temp_dir().join(format!("fathom-cli-test-{}", std::process::id()));

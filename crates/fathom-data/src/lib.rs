@@ -9,7 +9,9 @@
 //!
 //! - [`layout`]: fathom's own CSV layout for users' logs (`docs/own-data.md`): a
 //!   folder with `log.toml` and one CSV file per sensor, header with units, for
-//!   range-beacon localization and INS / DVL navigation.
+//!   range-beacon localization, INS / DVL navigation and GNSS / INS navigation.
+//! - [`ulog`]: PX4 ULog flight logs, read streaming (never whole) and converted into a
+//!   `gnss-ins` log.
 //!
 //! Every error names the file and, for text files, the 1-based line (for `.mat`
 //! matrices, the matrix and its 1-based row; for the CSV layout also the column).
@@ -22,3 +24,4 @@
 pub mod layout;
 pub mod matv5;
 pub mod plaza;
+pub mod ulog;

@@ -164,6 +164,33 @@ impl ErrorStateFilter {
         Ok(out)
     }
 
+    /// Position update (a GNSS fix): INS position `ins_pos_in_nav` against the fix
+    /// `fix_pos_in_nav` (NED, m) of covariance `r`; gated when `gate` is given.
+    ///
+    /// # Errors
+    /// As [`KalmanFilter::update_with_innovation_gated`].
+    pub fn update_position(
+        &mut self,
+        ins_pos_in_nav: &Vector3<f64>,
+        fix_pos_in_nav: &Vector3<f64>,
+        r: &Matrix3<f64>,
+        gate: Option<GateThreshold>,
+    ) -> Result<Gate<3>, EstimatorError> {
+        let t = self.kf.time();
+        check_finite_at("INS position", ins_pos_in_nav.as_slice(), t)?;
+        check_finite_at("fix position", fix_pos_in_nav.as_slice(), t)?;
+        let mut h = SMatrix::<f64, 3, N_ERROR_STATES>::zeros();
+        h.fixed_view_mut::<3, 3>(0, POS)
+            .copy_from(&Matrix3::identity());
+        let nu = (ins_pos_in_nav - fix_pos_in_nav) - h * self.kf.state();
+        let out = match gate {
+            Some(g) => self.kf.update_with_innovation_gated(&nu, &h, r, g)?,
+            None => Gate::Accepted(self.kf.update_with_innovation(&nu, &h, r)?),
+        };
+        self.record_update();
+        Ok(out)
+    }
+
     /// Depth update: INS depth `ins_depth` (m, down) against the gauge's `depth`
     /// of variance `r`.
     ///
@@ -279,6 +306,29 @@ mod tests {
             "{e}"
         );
         assert_eq!(f, before);
+    }
+
+    /// A position error seen by a fix goes into the position-error state (the
+    /// estimated minus true convention: INS minus fix), and a gate rejects a fix far
+    /// beyond the covariance.
+    #[test]
+    fn position_update_estimates_position_error_and_gates() {
+        let p0 = ErrorStateFilter::diagonal_covariance([1.0, 1.0, 1e-3, 1e-3, 1e-6]);
+        let mut f = ErrorStateFilter::new(&p0, 0.0).unwrap();
+        let r = Matrix3::identity();
+        let ins = Vector3::new(10.0, 5.0, -2.0);
+        let out = f
+            .update_position(&ins, &Vector3::new(9.0, 5.0, -2.0), &r, None)
+            .unwrap();
+        assert!(out.is_accepted());
+        let dx = f.take_correction().unwrap();
+        assert_abs_diff_eq!(dx[POS], 0.5, epsilon = 1e-12);
+        assert_abs_diff_eq!(dx[POS + 1], 0.0, epsilon = 1e-12);
+        let gate = GateThreshold::from_squared_distance(16.0).unwrap();
+        let far = f
+            .update_position(&ins, &Vector3::new(-90.0, 5.0, -2.0), &r, Some(gate))
+            .unwrap();
+        assert!(!far.is_accepted());
     }
 
     /// A velocity error seen by the aid goes into the velocity-error state with the

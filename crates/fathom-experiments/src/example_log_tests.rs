@@ -35,7 +35,7 @@ fn replay_job(
     dir: &Path,
     out: &Path,
 ) -> Result<ExperimentResult, SimError> {
-    let preset_dir = format!("dir = \"fathom-out/{}-log\"", exp.name());
+    let preset_dir = format!("dir = \"data/logs/{}-example\"", exp.name());
     assert!(exp.preset().contains(&preset_dir), "{}", exp.name());
     let text = exp
         .preset()

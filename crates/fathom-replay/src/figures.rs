@@ -50,9 +50,27 @@ pub fn plan_view(
     paths: &[Path<'_>],
     markers: Option<Series>,
 ) -> Result<(), SimError> {
+    plan_view_with(out, name, title, axes, ("truth", truth), paths, markers)
+}
+
+/// As [`plan_view`], the grey reference path labelled `reference.0` (`"truth"`, or
+/// another estimate such as an autopilot's when the log has no truth).
+///
+/// # Errors
+/// The figure's own errors (empty or non-finite points).
+pub fn plan_view_with(
+    out: &mut Analysis,
+    name: &str,
+    title: &str,
+    axes: (&str, &str),
+    reference: (&str, &[(f64, f64)]),
+    paths: &[Path<'_>],
+    markers: Option<Series>,
+) -> Result<(), SimError> {
+    let (label, truth) = reference;
     let step = thin(truth.len());
     let mut plan = PlanPlot::new(title, axes.0, axes.1).with_path(
-        Series::new("truth", truth.iter().step_by(step).copied().collect()).with_color(GREY),
+        Series::new(label, truth.iter().step_by(step).copied().collect()).with_color(GREY),
     );
     for p in paths {
         let step = thin(p.points.len());

@@ -10,6 +10,9 @@
 //!   ground truth;
 //! - [`ins_dvl`]: INS / DVL navigation on one's own log (PINS, INS-DVL, gated
 //!   INS-DVL, the RPM velocity filter, the 15-state ESKF);
+//! - [`gnss_ins`]: GNSS / INS navigation of a drone flight (a PX4 ULog or a
+//!   `gnss-ins` log): INS alone, the 12- and 15-state GPS/INS filters, against PX4's
+//!   EKF2 and, in simulation, the ground truth;
 //! - [`consistency`]: the tested measurements and the NIS summaries a replay reports;
 //! - [`own_log`]: what the two replays of one's own log share as jobs of the runner
 //!   (`fathom replay range-beacon|ins-dvl <dir>`): built-in settings, the log folder,
@@ -20,11 +23,12 @@
 //! - [`method_keys`]: the values each `[[methods]]` key of a replay accepts.
 //!
 //! [`own_log_replays`] lists the own-log replays as jobs ([`range_beacon::RangeBeacon`],
-//! [`ins_dvl::InsDvl`]) for the front ends, beside the paper experiments' registry.
+//! [`ins_dvl::InsDvl`], [`gnss_ins::GnssIns`]) for the front ends, beside the paper experiments' registry.
 
 pub mod consistency;
 pub mod data_dir;
 pub mod figures;
+pub mod gnss_ins;
 pub mod ins_dvl;
 pub mod method_keys;
 pub mod own_log;
@@ -34,7 +38,11 @@ pub mod range_beacon;
 use fathom_sim::experiment::DynExperiment;
 
 /// The replays of one's own log as jobs of the runner, in the order `fathom replay`
-/// lists them: `range-beacon`, `ins-dvl`.
+/// lists them: `range-beacon`, `ins-dvl`, `gnss-ins`.
 pub fn own_log_replays() -> Vec<&'static dyn DynExperiment> {
-    vec![&range_beacon::RangeBeacon, &ins_dvl::InsDvl]
+    vec![
+        &range_beacon::RangeBeacon,
+        &ins_dvl::InsDvl,
+        &gnss_ins::GnssIns,
+    ]
 }

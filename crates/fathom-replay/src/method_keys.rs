@@ -14,12 +14,16 @@ pub const RANGE_BEACON: &[(&str, &[&str])] = &[
 /// the 15-state error-state filter, `ESKF` in the `vkf` experiment).
 pub const INS_DVL: &[(&str, &[&str])] = &[("filter", &["pins", "ins-dvl", "vkf", "eskf"])];
 
-/// The keys and values of the replay named `kind` (`range-beacon`, `ins-dvl`); none
-/// for another name.
+/// `(key, accepted values)` of a `[[methods]]` entry of a `gnss-ins` replay.
+pub const GNSS_INS: &[(&str, &[&str])] = &[("filter", &["ins", "gps-ins-12", "gps-ins-15"])];
+
+/// The keys and values of the replay named `kind` (`range-beacon`, `ins-dvl`,
+/// `gnss-ins`); none for another name.
 pub fn method_keys(kind: &str) -> &'static [(&'static str, &'static [&'static str])] {
     match kind {
         "range-beacon" => RANGE_BEACON,
         "ins-dvl" => INS_DVL,
+        "gnss-ins" => GNSS_INS,
         _ => &[],
     }
 }
@@ -27,7 +31,7 @@ pub fn method_keys(kind: &str) -> &'static [(&'static str, &'static [&'static st
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::own_log::{INS_DVL_PRESET, RANGE_BEACON_PRESET};
+    use crate::own_log::{GNSS_INS_PRESET, INS_DVL_PRESET, RANGE_BEACON_PRESET};
 
     /// The preset with its `[[methods]]` replaced by one `entry`.
     fn with_method(preset: &str, entry: &str) -> String {
@@ -64,6 +68,13 @@ mod tests {
             for v in values.iter().chain(&["bogus"]) {
                 let text = with_method(INS_DVL_PRESET, &format!("{key} = \"{v}\""));
                 let parsed = crate::ins_dvl::parse_settings(&text, "t.toml");
+                assert_eq!(parsed.is_ok(), *v != "bogus", "{key} = {v}: {parsed:?}");
+            }
+        }
+        for (key, values) in GNSS_INS {
+            for v in values.iter().chain(&["bogus"]) {
+                let text = with_method(GNSS_INS_PRESET, &format!("{key} = \"{v}\""));
+                let parsed = crate::gnss_ins::parse_settings(&text, "t.toml");
                 assert_eq!(parsed.is_ok(), *v != "bogus", "{key} = {v}: {parsed:?}");
             }
         }

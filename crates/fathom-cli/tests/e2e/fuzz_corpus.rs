@@ -17,7 +17,7 @@ mod harness;
 
 type Harness = fn(&[u8]) -> Vec<String>;
 
-const TARGETS: [(&str, Harness); 7] = [
+const TARGETS: [(&str, Harness); 8] = [
     ("scenario", harness::scenario),
     ("scenario_edit", harness::scenario_edit),
     ("cost", harness::cost),
@@ -25,6 +25,7 @@ const TARGETS: [(&str, Harness); 7] = [
     ("plaza_mat", harness::plaza_mat),
     ("map_obj", harness::map_obj),
     ("map_stl", harness::map_stl),
+    ("ulog", harness::ulog),
 ];
 
 /// The input files in `dir` (sorted; `.expected` snapshots and dot files left out).

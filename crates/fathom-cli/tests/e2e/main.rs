@@ -27,6 +27,7 @@ mod quadrotor_ins;
 mod report_text;
 mod smoother;
 mod statistics;
+mod ulog;
 mod urban;
 mod user_scenarios;
 mod vkf;

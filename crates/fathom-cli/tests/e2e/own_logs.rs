@@ -568,7 +568,13 @@ fn the_repository_logs_are_what_the_commands_write() {
     for f in ["Plaza1_DR.txt", "Plaza1_TD.txt", "Plaza1_.mat"] {
         std::fs::copy(repo_root().join("data/plaza1").join(f), plaza.join(f)).unwrap();
     }
-    let commands: [(&str, &[&str]); 3] = [
+    std::fs::create_dir_all(root.join("data/ulog")).unwrap();
+    std::fs::copy(
+        repo_root().join("data/ulog/sitl_groundtruth.ulg"),
+        root.join("data/ulog/sitl_groundtruth.ulg"),
+    )
+    .unwrap();
+    let commands: [(&str, &[&str]); 4] = [
         (
             "range-beacon-example",
             &[
@@ -601,6 +607,16 @@ fn the_repository_logs_are_what_the_commands_write() {
                 "data/logs/plaza1-range-beacon",
             ],
         ),
+        (
+            "gnss-ins-sitl",
+            &[
+                "log",
+                "from-ulog",
+                "data/ulog/sitl_groundtruth.ulg",
+                "--out",
+                "data/logs/gnss-ins-sitl",
+            ],
+        ),
     ];
     for (name, args) in commands {
         ok(&root, args);
@@ -626,11 +642,15 @@ fn the_repository_logs_are_what_the_commands_write() {
         }
     }
     // And a fresh clone's replays read them without a folder.
-    for kind in ["range-beacon", "ins-dvl"] {
+    for (kind, log) in [
+        ("range-beacon", "range-beacon-example"),
+        ("ins-dvl", "ins-dvl-example"),
+        ("gnss-ins", "gnss-ins-sitl"),
+    ] {
         let r = fathom(&root, &["replay", kind]);
         assert_eq!(r.code, 0, "{kind}: {r:?}");
         assert!(
-            r.stdout.contains(&format!("data/logs/{kind}-example")),
+            r.stdout.contains(&format!("data/logs/{log}")),
             "{}",
             r.stdout
         );

@@ -1,12 +1,15 @@
 //! The own-data layout (version 1, `docs/own-data.md`): a log is a folder with a
 //! manifest `log.toml` (format, version, kind) and one CSV file per sensor, each with
 //! a header naming its columns and their units (`range[m]`, `heading[deg]`), time in
-//! seconds. Two kinds exist, one per family of estimators fathom has:
+//! seconds. Three kinds exist, one per family of estimators fathom has:
 //!
 //! - [`range_beacon`]: range-beacon localization (wheel odometry, or DVL + heading;
 //!   ranges to the beacons of a beacon table; depth; optional ground truth);
 //! - [`ins_dvl`]: INS / DVL navigation (IMU increments or rates, DVL velocity, depth,
-//!   echo sounder, propeller RPM; optional ground truth).
+//!   echo sounder, propeller RPM; optional ground truth);
+//! - [`gnss_ins`]: GNSS / INS navigation of a drone (IMU rates, GNSS fixes with their
+//!   accuracy, baro, magnetometer, range sensor; the autopilot's estimate as a
+//!   reference track; optional ground truth), what `fathom log from-ulog` writes.
 //!
 //! Reading converts every value into SI once ([`units`]) and checks it: a missing
 //! file or column, a wrong unit, NaN, an implausible magnitude, time going backwards,
@@ -17,6 +20,7 @@
 
 pub mod convert;
 pub mod error;
+pub mod gnss_ins;
 pub mod ins_dvl;
 pub mod range_beacon;
 mod specs;
@@ -42,7 +46,7 @@ pub const FORMAT: &str = "fathom-log";
 /// The layout version this fathom reads and writes.
 pub const VERSION: u32 = 1;
 
-/// The two kinds of log.
+/// The kinds of log.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub enum LogKind {
     /// Range-beacon localization ([`range_beacon`]).
@@ -51,6 +55,9 @@ pub enum LogKind {
     /// INS / DVL navigation ([`ins_dvl`]).
     #[serde(rename = "ins-dvl")]
     InsDvl,
+    /// GNSS / INS navigation of a drone ([`gnss_ins`]).
+    #[serde(rename = "gnss-ins")]
+    GnssIns,
 }
 
 impl LogKind {
@@ -59,6 +66,7 @@ impl LogKind {
         match self {
             LogKind::RangeBeacon => "range-beacon",
             LogKind::InsDvl => "ins-dvl",
+            LogKind::GnssIns => "gnss-ins",
         }
     }
 
@@ -67,6 +75,7 @@ impl LogKind {
         match self {
             LogKind::RangeBeacon => "a `range-beacon` log",
             LogKind::InsDvl => "an `ins-dvl` log",
+            LogKind::GnssIns => "a `gnss-ins` log",
         }
     }
 
@@ -75,6 +84,7 @@ impl LogKind {
         match self {
             LogKind::RangeBeacon => range_beacon::SPECS.iter().map(|s| s.file).collect(),
             LogKind::InsDvl => ins_dvl::SPECS.iter().map(|s| s.file).collect(),
+            LogKind::GnssIns => gnss_ins::SPECS.iter().map(|s| s.file).collect(),
         }
     }
 }
@@ -87,7 +97,7 @@ pub struct Manifest {
     pub format: String,
     /// The layout version (this fathom: 1).
     pub version: u32,
-    /// `"range-beacon"` or `"ins-dvl"`.
+    /// `"range-beacon"`, `"ins-dvl"` or `"gnss-ins"`.
     pub kind: LogKind,
     /// Free text: where the data come from.
     #[serde(default, skip_serializing_if = "String::is_empty")]
@@ -176,7 +186,7 @@ impl FileSet {
             return Err(LogError::MissingFile {
                 path: manifest_path,
                 why: "every log folder starts with `log.toml` (format = \"fathom-log\", version = 1, \
-                      kind = \"range-beacon\" or \"ins-dvl\"); see docs/own-data.md"
+                      kind = \"range-beacon\", \"ins-dvl\" or \"gnss-ins\"); see docs/own-data.md"
                     .into(),
             });
         }

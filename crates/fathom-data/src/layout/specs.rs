@@ -1,10 +1,12 @@
-//! The columns of every file of both log kinds (`docs/own-data.md`): one
+//! The columns of every file of the log kinds (`docs/own-data.md`): one
 //! [`FileSpec`] per file, and the columns several files share (the time stamp, the
 //! north / east position, a DVL's body velocity) declared once. The parsers of the
 //! kinds ([`super::range_beacon`], [`super::ins_dvl`]) re-export their kind's specs.
 
 use super::table::{Check, ColumnSpec as C, FileSpec, TimeOrder};
-use super::units::Quantity::{Acceleration, Angle, AngularRate, Count, Length, Rpm, Speed, Time};
+use super::units::Quantity::{
+    Acceleration, Angle, AngularRate, Count, Length, MagneticField, Rpm, Speed, Time,
+};
 
 /// `time[s]`, the first column of every timed file.
 const TIME: C = C::required("time", Time, Check::Any);
@@ -195,4 +197,107 @@ pub mod ins_dvl {
 
     /// Every file of the kind.
     pub const SPECS: [FileSpec; 7] = [INITIAL, IMU, DVL, DEPTH, ALTITUDE, RPM, TRUTH];
+}
+
+/// The files of a `gnss-ins` log (a drone's flight: `fathom log from-ulog`).
+pub mod gnss_ins {
+    use super::*;
+
+    /// Geodetic position: latitude, longitude, altitude (above the GNSS datum, up).
+    const LATITUDE: C = C::required("latitude", Angle, Check::Latitude);
+    const LONGITUDE: C = C::required("longitude", Angle, Check::Any);
+    const ALTITUDE: C = C::required("altitude", Length, Check::Any);
+    /// NED velocity.
+    const VEL: [C; 3] = [
+        C::required("vel_north", Speed, Check::Any),
+        C::required("vel_east", Speed, Check::Any),
+        C::required("vel_down", Speed, Check::Any),
+    ];
+
+    /// `imu.csv`: mean body rates and specific force over (previous row, this row],
+    /// body axes forward-right-down.
+    pub const IMU: FileSpec = FileSpec::timed(
+        "imu.csv",
+        &[
+            TIME,
+            C::required("gyro_x", AngularRate, Check::Any),
+            C::required("gyro_y", AngularRate, Check::Any),
+            C::required("gyro_z", AngularRate, Check::Any),
+            C::required("accel_x", Acceleration, Check::Any),
+            C::required("accel_y", Acceleration, Check::Any),
+            C::required("accel_z", Acceleration, Check::Any),
+        ],
+    );
+
+    /// `gnss.csv`: the receiver's fixes with its accuracy estimates.
+    pub const GNSS: FileSpec = FileSpec::timed(
+        "gnss.csv",
+        &[
+            TIME,
+            LATITUDE,
+            LONGITUDE,
+            ALTITUDE,
+            C::required("h_acc", Length, Check::NonNegative),
+            C::required("v_acc", Length, Check::NonNegative),
+            VEL[0],
+            VEL[1],
+            VEL[2],
+            C::required("speed_acc", Speed, Check::NonNegative),
+            C::required("fix_type", Count, Check::Integer),
+            C::required("satellites", Count, Check::Integer),
+        ],
+    );
+
+    /// `baro.csv`: barometric altitude (up).
+    pub const BARO: FileSpec = FileSpec::timed(
+        "baro.csv",
+        &[TIME, C::required("altitude", Length, Check::Any)],
+    );
+
+    /// `mag.csv`: magnetometer, body axes.
+    pub const MAG: FileSpec = FileSpec::timed(
+        "mag.csv",
+        &[
+            TIME,
+            C::required("mag_x", MagneticField, Check::Any),
+            C::required("mag_y", MagneticField, Check::Any),
+            C::required("mag_z", MagneticField, Check::Any),
+        ],
+    );
+
+    /// `range.csv`: a distance sensor (PX4 `orientation` code: 25 = downward).
+    pub const RANGE: FileSpec = FileSpec::timed(
+        "range.csv",
+        &[
+            TIME,
+            C::required("distance", Length, Check::NonNegative),
+            C::required("orientation", Count, Check::Integer),
+        ],
+    );
+
+    /// `reference.csv`: the autopilot's own estimate (PX4's EKF2), a reference track.
+    pub const REFERENCE: FileSpec = FileSpec::timed(
+        "reference.csv",
+        &[
+            TIME,
+            LATITUDE,
+            LONGITUDE,
+            ALTITUDE,
+            VEL[0],
+            VEL[1],
+            VEL[2],
+            C::required("roll", Angle, Check::Any),
+            C::required("pitch", Angle, Check::Any),
+            C::required("heading", Angle, Check::Any),
+        ],
+    );
+
+    /// `truth.csv`: ground truth (a simulator's).
+    pub const TRUTH: FileSpec = FileSpec::timed(
+        "truth.csv",
+        &[TIME, LATITUDE, LONGITUDE, ALTITUDE, VEL[0], VEL[1], VEL[2]],
+    );
+
+    /// Every file of the kind.
+    pub const SPECS: [FileSpec; 7] = [IMU, GNSS, BARO, MAG, RANGE, REFERENCE, TRUTH];
 }

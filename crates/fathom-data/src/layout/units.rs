@@ -21,6 +21,8 @@ pub enum Quantity {
     Acceleration,
     /// Propeller speed, rev/min.
     Rpm,
+    /// Magnetic flux density (magnetometer), T.
+    MagneticField,
     /// A number without unit: a beacon id, a 0/1 flag.
     Count,
 }
@@ -40,6 +42,15 @@ fn per_minute(v: f64) -> f64 {
     v
 }
 
+/// Gauss (PX4's magnetometer unit) to tesla.
+fn gauss_to_tesla(v: f64) -> f64 {
+    v * 1e-4
+}
+
+fn microtesla_to_tesla(v: f64) -> f64 {
+    v * 1e-6
+}
+
 impl Quantity {
     /// The accepted unit spellings and their conversions into the SI unit (the first).
     fn units(self) -> &'static [(&'static str, Conversion)] {
@@ -55,6 +66,11 @@ impl Quantity {
             Quantity::Speed => &[("m/s", identity), ("kn", knots_to_mps)],
             Quantity::Acceleration => &[("m/s^2", identity), ("g", g_to_mps2)],
             Quantity::Rpm => &[("rpm", per_minute), ("1/min", per_minute)],
+            Quantity::MagneticField => &[
+                ("T", identity),
+                ("G", gauss_to_tesla),
+                ("uT", microtesla_to_tesla),
+            ],
             Quantity::Count => &[],
         }
     }
@@ -69,6 +85,7 @@ impl Quantity {
             Quantity::Speed => "a velocity",
             Quantity::Acceleration => "a specific force",
             Quantity::Rpm => "a propeller speed",
+            Quantity::MagneticField => "a magnetic flux density",
             Quantity::Count => "a number without unit",
         }
     }
@@ -105,7 +122,7 @@ impl Quantity {
     /// measurement, and would overflow the filters' arithmetic). Times up to 10^12 s
     /// (about 31,700 years: Unix stamps pass), positions 10^7 m, speeds 10^3 m/s,
     /// angles 10^3 rad (unwrapped headings pass), rates 10^3 rad/s, specific forces
-    /// 10^4 m/s², propeller speeds 10^6 rpm, counts 10^15.
+    /// 10^4 m/s², propeller speeds 10^6 rpm, magnetic fields 1 T, counts 10^15.
     pub fn bound(self) -> f64 {
         match self {
             Quantity::Time => 1e12,
@@ -115,6 +132,7 @@ impl Quantity {
             Quantity::Speed => 1e3,
             Quantity::Acceleration => 1e4,
             Quantity::Rpm => 1e6,
+            Quantity::MagneticField => 1.0,
             Quantity::Count => 1e15,
         }
     }
@@ -164,6 +182,8 @@ mod tests {
         let g = Quantity::Acceleration.conversion("g").unwrap();
         assert_eq!(g.to_si(1.0), 9.806_65);
         assert_eq!(Quantity::Length.conversion("m").unwrap().to_si(2.5), 2.5);
+        let gauss = Quantity::MagneticField.conversion("G").unwrap();
+        assert!((gauss.to_si(0.5) - 5e-5).abs() < 1e-20);
         // Negative controls: a unit of another quantity, a unit the layout does not know.
         assert!(Quantity::Angle.conversion("m").is_none());
         assert!(Quantity::Length.conversion("ft").is_none());

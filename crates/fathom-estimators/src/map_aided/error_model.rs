@@ -159,6 +159,57 @@ pub fn transition(
     (phi, (qd + qd.transpose()) * 0.5)
 }
 
+/// `Phi`, `Q_d` of one step of the 15-state extension with a gyro-bias error
+/// `db_g` (true minus estimated, body axes, like the accelerometer bias), in the
+/// layout of [`crate::error_state`] (`[dp, dv, psi, db_a, db_g]`): the 12-state
+/// numbers of [`transition`] plus `d/dt psi = C db_g` and the gyro-bias random walk of
+/// PSD `gyro_bias_psd` ((rad/s)^2 / s). `F` stays nilpotent (`F^4 = 0`), so
+///
+/// ```text
+/// Phi: ag = dt C, vg = dt^2/2 A C, pg = dt^3/6 A C
+/// Q_d: gg = q_bg dt I, ag = q_bg dt^2/2 C, aa += q_bg dt^3/3 I
+/// ```
+///
+/// with `A = -[(C f) x]`; the bias walk's terms through velocity and position (of
+/// order `q_bg dt^4` and smaller) are left out, which keeps `Q_d` positive
+/// semi-definite (the added block is that of an integrated random walk).
+pub fn transition_with_gyro_bias(
+    nav_from_body: &UnitQuaternion<f64>,
+    specific_force_in_body: &Vector3<f64>,
+    noise: &ImuNoise,
+    gyro_bias_psd: f64,
+    dt: f64,
+) -> (
+    crate::error_state::ErrorCovariance,
+    crate::error_state::ErrorCovariance,
+) {
+    use crate::error_state::{ErrorCovariance, GYRO_BIAS};
+    let (phi12, qd12) = transition(nav_from_body, specific_force_in_body, noise, dt);
+    let c = nav_from_body.to_rotation_matrix().into_inner();
+    let a = -skew(&(c * specific_force_in_body));
+    let mut phi = ErrorCovariance::identity();
+    phi.fixed_view_mut::<12, 12>(0, 0).copy_from(&phi12);
+    phi.fixed_view_mut::<3, 3>(ATT, GYRO_BIAS)
+        .copy_from(&(c * dt));
+    phi.fixed_view_mut::<3, 3>(VEL, GYRO_BIAS)
+        .copy_from(&(a * c * (0.5 * dt * dt)));
+    phi.fixed_view_mut::<3, 3>(POS, GYRO_BIAS)
+        .copy_from(&(a * c * (dt * dt * dt / 6.0)));
+    let mut qd = ErrorCovariance::zeros();
+    qd.fixed_view_mut::<12, 12>(0, 0).copy_from(&qd12);
+    let q = gyro_bias_psd;
+    let eye = Matrix3::<f64>::identity();
+    qd.fixed_view_mut::<3, 3>(GYRO_BIAS, GYRO_BIAS)
+        .copy_from(&(eye * (q * dt)));
+    let ag = c * (q * dt * dt / 2.0);
+    qd.fixed_view_mut::<3, 3>(ATT, GYRO_BIAS).copy_from(&ag);
+    qd.fixed_view_mut::<3, 3>(GYRO_BIAS, ATT)
+        .copy_from(&ag.transpose());
+    let aa = qd.fixed_view::<3, 3>(ATT, ATT) + eye * (q * dt * dt * dt / 3.0);
+    qd.fixed_view_mut::<3, 3>(ATT, ATT).copy_from(&aa);
+    (phi, (qd + qd.transpose()) * 0.5)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -294,5 +345,44 @@ mod tests {
             assert_eq!(qd, qd.transpose());
             assert!(qd.cholesky().is_some());
         }
+    }
+
+    #[test]
+    fn gyro_bias_extension_is_exp_of_its_f_and_keeps_the_12_state_block() {
+        let q = UnitQuaternion::from_euler_angles(0.1, -0.2, 0.7);
+        let f = Vector3::new(0.3, -0.1, -9.7);
+        let noise = ImuNoise {
+            accel_psd: 1e-4,
+            gyro_psd: 1e-6,
+            accel_bias_psd: 1e-8,
+        };
+        let dt = 0.01;
+        let (phi, qd) = transition_with_gyro_bias(&q, &f, &noise, 1e-9, dt);
+        let (phi12, qd12) = transition(&q, &f, &noise, dt);
+        assert_eq!(phi.fixed_view::<12, 12>(0, 0), phi12);
+        assert!(
+            (qd.fixed_view::<9, 9>(0, 0) - qd12.fixed_view::<9, 9>(0, 0))
+                .abs()
+                .max()
+                < 1e-12
+        );
+        // Phi = exp(F dt) with F the 12-state F plus C in (psi, b_g): F^4 = 0
+        let (f12, _) = error_dynamics(&q, &f);
+        let mut big = SMatrix::<f64, 15, 15>::zeros();
+        big.fixed_view_mut::<12, 12>(0, 0).copy_from(&f12);
+        big.fixed_view_mut::<3, 3>(ATT, 12)
+            .copy_from(&q.to_rotation_matrix().into_inner());
+        let f2 = big * big;
+        let f3 = f2 * big;
+        assert!((f3 * big).abs().max() < 1e-12);
+        let expected = SMatrix::<f64, 15, 15>::identity()
+            + big * dt
+            + f2 * (dt * dt / 2.0)
+            + f3 * (dt * dt * dt / 6.0);
+        assert!((phi - expected).abs().max() < 1e-12);
+        // Q_d symmetric, positive semi-definite
+        assert_eq!(qd, qd.transpose());
+        let eig = qd.symmetric_eigen().eigenvalues;
+        assert!(eig.min() > -1e-18, "{eig}");
     }
 }

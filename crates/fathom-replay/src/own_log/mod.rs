@@ -27,6 +27,8 @@ use crate::data_dir::find_data_dir;
 pub const RANGE_BEACON_PRESET: &str = include_str!("../../../../scenarios/range-beacon.toml");
 /// The built-in settings of `fathom replay ins-dvl` (`scenarios/ins-dvl.toml`).
 pub const INS_DVL_PRESET: &str = include_str!("../../../../scenarios/ins-dvl.toml");
+/// The built-in settings of `fathom replay gnss-ins|ulog` (`scenarios/gnss-ins.toml`).
+pub const GNSS_INS_PRESET: &str = include_str!("../../../../scenarios/gnss-ins.toml");
 /// The document the replays' `summary.json` names as their source (`seed_doc`).
 pub const SEED_DOC: &str = "docs/own-data.md";
 

@@ -1,0 +1,370 @@
+//! The `gnss-ins` replay settings: the schema of `scenarios/gnss-ins.toml` (IMU noise,
+//! GNSS handling with outage windows, initial uncertainty, then a `[[methods]]` list)
+//! and its check into [`GnssInsSettings`].
+
+use fathom_estimators::map_aided::{ImuNoise, Ins12Params};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use crate::range_beacon::LogDirToml;
+use fathom_sim::SimError;
+use fathom_sim::method_list::check_method_names;
+use fathom_sim::scenario::{
+    require_experiment, require_in_range, require_non_negative, require_positive,
+};
+
+/// GNSS / INS navigation of a drone flight (a PX4 ULog, or a `gnss-ins` log).
+///
+/// Replays a strapdown INS (the local-level mechanization of `fathom_ins`) alone and
+/// aided by the log's GNSS fixes, with the 12-state error-state filter of the `urban`
+/// experiment (`[dp, dv, psi, b_a]`) and its 15-state extension with a gyro bias,
+/// against the autopilot's own estimate (PX4's EKF2, `reference.csv`: "agreement with
+/// EKF2") and, when the log has it, the simulator's ground truth. GNSS outages can be
+/// injected (fixes dropped in given windows) to show dead-reckoning drift. One
+/// deterministic replay. `fathom replay gnss-ins <dir>` or `fathom replay ulog
+/// <file.ulg>` runs it. Preset: `scenarios/gnss-ins.toml`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GnssInsToml {
+    /// The experiment this file is for.
+    ///
+    /// Range: `"gnss-ins"`.
+    pub experiment: String,
+    /// Where the log is (a `gnss-ins` folder, or a `.ulg` file converted in memory).
+    pub data: LogDirToml,
+    /// The IMU noise the filters assume.
+    pub imu: GnssInsImuToml,
+    /// GNSS handling.
+    pub gnss: GnssAidToml,
+    /// Initial uncertainty of the filters.
+    pub initial: GnssInsInitialToml,
+    /// The methods to run on the same log. Default: INS, GPS-INS-12, GPS-INS-15.
+    #[serde(default = "default_methods")]
+    pub methods: Vec<GnssInsMethodToml>,
+}
+
+/// `[imu]`: white noise and bias random walks, SI.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GnssInsImuToml {
+    /// Accelerometer white noise (velocity random walk).
+    ///
+    /// Unit: m/s/√s. Range: >= 0.
+    pub velocity_random_walk_mps_per_sqrt_s: f64,
+    /// Gyro white noise (angle random walk).
+    ///
+    /// Unit: rad/√s. Range: >= 0.
+    pub angle_random_walk_rad_per_sqrt_s: f64,
+    /// Accelerometer-bias random walk.
+    ///
+    /// Unit: m/s²/√s. Range: >= 0.
+    pub accel_bias_random_walk_mps2_per_sqrt_s: f64,
+    /// Gyro-bias random walk (the 15-state filter).
+    ///
+    /// Unit: rad/s/√s. Range: >= 0.
+    pub gyro_bias_random_walk_radps_per_sqrt_s: f64,
+}
+
+/// `[gnss]`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GnssAidToml {
+    /// The lowest fix type used (PX4: 3 = 3D, 4 = DGPS, 5 RTK float, 6 RTK fixed).
+    ///
+    /// Range: 2 to 6.
+    pub min_fix_type: u32,
+    /// Floor of the horizontal and vertical σ of a fix (the receiver's `eph`, `epv`
+    /// are used above it).
+    ///
+    /// Unit: m. Range: > 0.
+    pub min_sigma_m: f64,
+    /// Floor of the velocity σ (the receiver's speed accuracy above it).
+    ///
+    /// Unit: m/s. Range: > 0.
+    pub min_speed_sigma_mps: f64,
+    /// Whether the fixes' velocity is used too (6-dof updates).
+    pub use_velocity: bool,
+    /// Probability that a consistent fix passes the chi-square gate.
+    ///
+    /// Range: 0 to 1 (exclusive).
+    pub gate_probability: f64,
+    /// Outage windows: fixes in `[start_s, end_s)` (seconds from the replay's start)
+    /// are dropped.
+    #[serde(default)]
+    pub outages: Vec<OutageToml>,
+}
+
+/// One GNSS outage.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct OutageToml {
+    /// Start, seconds after the replay's start.
+    ///
+    /// Unit: s. Range: >= 0.
+    pub start_s: f64,
+    /// End (exclusive), seconds after the replay's start.
+    ///
+    /// Unit: s. Range: > start_s.
+    pub end_s: f64,
+}
+
+/// `[initial]`: the filters' initial σ (the start state is EKF2's).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GnssInsInitialToml {
+    /// Position σ per axis.
+    ///
+    /// Unit: m. Range: > 0.
+    pub sigma_pos_m: f64,
+    /// Velocity σ per axis.
+    ///
+    /// Unit: m/s. Range: > 0.
+    pub sigma_vel_mps: f64,
+    /// Attitude σ per axis.
+    ///
+    /// Unit: rad. Range: > 0.
+    pub sigma_att_rad: f64,
+    /// Accelerometer-bias σ per axis.
+    ///
+    /// Unit: m/s². Range: > 0.
+    pub sigma_accel_bias_mps2: f64,
+    /// Gyro-bias σ per axis (the 15-state filter).
+    ///
+    /// Unit: rad/s. Range: > 0.
+    pub sigma_gyro_bias_radps: f64,
+}
+
+/// One `[[methods]]` entry.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GnssInsMethodToml {
+    /// Name in tables, CSV headers and figures (unique).
+    pub name: String,
+    /// `"ins"` (strapdown alone), `"gps-ins-12"` (12-state filter) or `"gps-ins-15"`
+    /// (15-state filter with gyro bias).
+    pub filter: String,
+}
+
+/// The default methods.
+pub fn default_methods() -> Vec<GnssInsMethodToml> {
+    [
+        ("INS", "ins"),
+        ("GPS-INS-12", "gps-ins-12"),
+        ("GPS-INS-15", "gps-ins-15"),
+    ]
+    .into_iter()
+    .map(|(n, f)| GnssInsMethodToml {
+        name: n.into(),
+        filter: f.into(),
+    })
+    .collect()
+}
+
+/// What a method runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub enum GnssInsFilter {
+    /// The strapdown INS alone.
+    Ins,
+    /// The 12-state error-state filter `[dp, dv, psi, b_a]`.
+    Ekf12,
+    /// The 15-state filter `[dp, dv, psi, b_a, b_g]`.
+    Ekf15,
+}
+
+/// The `filter` values.
+pub const FILTERS: [(&str, GnssInsFilter); 3] = [
+    ("ins", GnssInsFilter::Ins),
+    ("gps-ins-12", GnssInsFilter::Ekf12),
+    ("gps-ins-15", GnssInsFilter::Ekf15),
+];
+
+/// A checked method.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct GnssInsMethod {
+    /// Its name.
+    pub name: String,
+    /// What it runs.
+    pub filter: GnssInsFilter,
+}
+
+/// Checked settings.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GnssInsSettings {
+    /// `[data] dir`.
+    pub data_dir: String,
+    /// IMU noise PSDs of the 12-state model.
+    pub noise: ImuNoise,
+    /// Gyro-bias random-walk PSD, (rad/s)^2/s.
+    pub gyro_bias_psd: f64,
+    /// Lowest fix type used.
+    pub min_fix_type: u32,
+    /// σ floors: position m, velocity m/s.
+    pub min_sigma: [f64; 2],
+    /// Whether the fix velocity is used.
+    pub use_velocity: bool,
+    /// Gate probability.
+    pub gate_probability: f64,
+    /// Outage windows `[start, end)`, s from the start, sorted.
+    pub outages: Vec<[f64; 2]>,
+    /// Initial σ: position, velocity, attitude, accel bias, gyro bias.
+    pub sigma0: [f64; 5],
+    /// The methods.
+    pub methods: Vec<GnssInsMethod>,
+}
+
+impl GnssInsSettings {
+    /// Whether `t` (s from the start) is inside an outage.
+    pub fn in_outage(&self, t: f64) -> bool {
+        self.outages.iter().any(|w| t >= w[0] && t < w[1])
+    }
+}
+
+impl GnssInsToml {
+    /// Checks every value.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming the key.
+    pub fn check(&self, file: &str) -> Result<GnssInsSettings, SimError> {
+        require_experiment(file, &self.experiment, "gnss-ins")?;
+        let i = &self.imu;
+        let noise = Ins12Params {
+            velocity_random_walk_mps_per_sqrt_s: i.velocity_random_walk_mps_per_sqrt_s,
+            angle_random_walk_rad_per_sqrt_s: i.angle_random_walk_rad_per_sqrt_s,
+            accel_bias_random_walk_mps2_per_sqrt_s: i.accel_bias_random_walk_mps2_per_sqrt_s,
+        }
+        .check()
+        .map_err(|e| SimError::invalid(file, "imu", e.to_string()))?;
+        let gbrw = require_non_negative(
+            file,
+            "imu.gyro_bias_random_walk_radps_per_sqrt_s",
+            i.gyro_bias_random_walk_radps_per_sqrt_s,
+        )?;
+        let g = &self.gnss;
+        require_in_range(
+            file,
+            "gnss.min_fix_type",
+            f64::from(g.min_fix_type),
+            2.0,
+            6.0,
+        )?;
+        let p = g.gate_probability;
+        if !(p > 0.0 && p < 1.0) {
+            return Err(SimError::invalid(
+                file,
+                "gnss.gate_probability",
+                format!("must be strictly between 0 and 1, got {p}"),
+            ));
+        }
+        let mut outages = Vec::with_capacity(g.outages.len());
+        for (k, o) in g.outages.iter().enumerate() {
+            let start =
+                require_non_negative(file, &format!("gnss.outages[{k}].start_s"), o.start_s)?;
+            let end = require_positive(file, &format!("gnss.outages[{k}].end_s"), o.end_s)?;
+            if end <= start {
+                return Err(SimError::invalid(
+                    file,
+                    format!("gnss.outages[{k}].end_s"),
+                    format!("must be after start_s ({start} s), got {end} s"),
+                ));
+            }
+            outages.push([start, end]);
+        }
+        outages.sort_by(|a, b| a[0].total_cmp(&b[0]));
+        let s = &self.initial;
+        let pos = |k: &str, v: f64| require_positive(file, k, v);
+        let sigma0 = [
+            pos("initial.sigma_pos_m", s.sigma_pos_m)?,
+            pos("initial.sigma_vel_mps", s.sigma_vel_mps)?,
+            pos("initial.sigma_att_rad", s.sigma_att_rad)?,
+            pos("initial.sigma_accel_bias_mps2", s.sigma_accel_bias_mps2)?,
+            pos("initial.sigma_gyro_bias_radps", s.sigma_gyro_bias_radps)?,
+        ];
+        let names: Vec<&str> = self.methods.iter().map(|m| m.name.as_str()).collect();
+        check_method_names(file, &names)?;
+        let methods = self
+            .methods
+            .iter()
+            .enumerate()
+            .map(|(k, m)| {
+                let filter = FILTERS
+                    .iter()
+                    .find(|(n, _)| *n == m.filter)
+                    .map(|f| f.1)
+                    .ok_or_else(|| {
+                        SimError::invalid(
+                            file,
+                            format!("methods[{k}].filter"),
+                            format!(
+                                "unknown filter \"{}\"; use one of: ins, gps-ins-12, gps-ins-15",
+                                fathom_core::echo::echo(&m.filter)
+                            ),
+                        )
+                    })?;
+                Ok(GnssInsMethod {
+                    name: m.name.clone(),
+                    filter,
+                })
+            })
+            .collect::<Result<Vec<_>, SimError>>()?;
+        Ok(GnssInsSettings {
+            data_dir: self.data.dir.clone(),
+            noise,
+            gyro_bias_psd: gbrw * gbrw,
+            min_fix_type: g.min_fix_type,
+            min_sigma: [
+                pos("gnss.min_sigma_m", g.min_sigma_m)?,
+                pos("gnss.min_speed_sigma_mps", g.min_speed_sigma_mps)?,
+            ],
+            use_velocity: g.use_velocity,
+            gate_probability: p,
+            outages,
+            sigma0,
+            methods,
+        })
+    }
+}
+
+// A deterministic scenario: no `runs`, no `base_seed` (one replay of a recorded log).
+fathom_sim::deterministic_scenario!(GnssInsToml);
+
+/// Parses and checks a settings text (`file` labels errors).
+///
+/// # Errors
+/// The TOML's or the check's [`SimError`].
+pub fn parse_settings(text: &str, file: &str) -> Result<GnssInsSettings, SimError> {
+    let toml: GnssInsToml = fathom_sim::scenario::parse_toml(text, file)?;
+    toml.check(file)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::own_log::GNSS_INS_PRESET;
+
+    #[test]
+    fn the_preset_checks_and_bad_values_name_their_key() {
+        let s = parse_settings(GNSS_INS_PRESET, "p.toml").unwrap();
+        assert_eq!(s.methods.len(), 3);
+        assert!(s.outages.is_empty() && !s.in_outage(5.0));
+        let with_outage = GNSS_INS_PRESET.replace(
+            "gate_probability = 0.9999\n",
+            "gate_probability = 0.9999\n[[gnss.outages]]\nstart_s = 10.0\nend_s = 30.0\n",
+        );
+        let s = parse_settings(&with_outage, "p.toml").unwrap();
+        assert!(s.in_outage(10.0) && s.in_outage(29.9) && !s.in_outage(30.0) && !s.in_outage(9.9));
+        let e = |text: String| parse_settings(&text, "p.toml").unwrap_err().to_string();
+        let backwards = with_outage.replace("end_s = 30.0", "end_s = 5.0");
+        assert!(e(backwards).contains("gnss.outages[0].end_s"));
+        let unknown = GNSS_INS_PRESET.replace(
+            "use_velocity = true",
+            "use_velocity = true\nlatency_s = 0.1",
+        );
+        assert!(e(unknown).contains("latency_s"));
+        let gate = GNSS_INS_PRESET.replace("gate_probability = 0.9999", "gate_probability = 1.0");
+        assert!(e(gate).contains("gnss.gate_probability"));
+        let fix = GNSS_INS_PRESET.replace("min_fix_type = 3", "min_fix_type = 9");
+        assert!(e(fix).contains("gnss.min_fix_type"));
+        let sigma = GNSS_INS_PRESET.replace("sigma_att_rad = 0.05", "sigma_att_rad = 0.0");
+        assert!(e(sigma).contains("initial.sigma_att_rad"));
+    }
+}
