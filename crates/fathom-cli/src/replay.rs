@@ -42,13 +42,8 @@ pub(crate) struct UlogArgs {
     /// built in.
     #[arg(long, value_name = "FILE")]
     pub(crate) config: Option<PathBuf>,
-    /// Output folder (default `fathom-out/gnss-ins-replay`).
-    #[arg(long, value_name = "DIR")]
-    pub(crate) out: Option<PathBuf>,
-    /// Write into a folder holding files fathom did not write (they are kept; only
-    /// fathom's own files are replaced).
-    #[arg(long)]
-    pub(crate) force: bool,
+    #[command(flatten)]
+    pub(crate) output: ReplayOut,
 }
 
 #[derive(Debug, Args)]
@@ -72,6 +67,18 @@ pub(crate) struct PlazaArgs {
     pub(crate) seed: Option<String>,
 }
 
+/// Where an own-log replay writes (`--out`, `--force`).
+#[derive(Debug, Args)]
+pub(crate) struct ReplayOut {
+    /// Output folder (default `fathom-out/<kind>-replay`, `<kind>` the replay's).
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+    /// Write into a folder holding files fathom did not write (they are kept; only
+    /// fathom's own files are replaced).
+    #[arg(long)]
+    pub(crate) force: bool,
+}
+
 /// `fathom replay range-beacon`.
 #[derive(Debug, Args)]
 pub(crate) struct RangeBeaconArgs {
@@ -85,13 +92,8 @@ pub(crate) struct RangeBeaconArgs {
     /// noise, gating, the AS / SC / SI schemes); default: built in.
     #[arg(long, value_name = "FILE")]
     pub(crate) config: Option<PathBuf>,
-    /// Output folder (default `fathom-out/range-beacon-replay`).
-    #[arg(long, value_name = "DIR")]
-    pub(crate) out: Option<PathBuf>,
-    /// Write into a folder holding files fathom did not write (they are kept; only
-    /// fathom's own files are replaced).
-    #[arg(long)]
-    pub(crate) force: bool,
+    #[command(flatten)]
+    pub(crate) output: ReplayOut,
 }
 
 /// `fathom replay ins-dvl`.
@@ -107,13 +109,8 @@ pub(crate) struct InsDvlArgs {
     /// noise, the INS-DVL and RPM velocity filters); default: built in.
     #[arg(long, value_name = "FILE")]
     pub(crate) config: Option<PathBuf>,
-    /// Output folder (default `fathom-out/ins-dvl-replay`).
-    #[arg(long, value_name = "DIR")]
-    pub(crate) out: Option<PathBuf>,
-    /// Write into a folder holding files fathom did not write (they are kept; only
-    /// fathom's own files are replaced).
-    #[arg(long)]
-    pub(crate) force: bool,
+    #[command(flatten)]
+    pub(crate) output: ReplayOut,
 }
 
 /// `fathom replay gnss-ins`.
@@ -128,13 +125,8 @@ pub(crate) struct GnssInsArgs {
     /// GNSS floors and outages, the filters); default: built in.
     #[arg(long, value_name = "FILE")]
     pub(crate) config: Option<PathBuf>,
-    /// Output folder (default `fathom-out/gnss-ins-replay`).
-    #[arg(long, value_name = "DIR")]
-    pub(crate) out: Option<PathBuf>,
-    /// Write into a folder holding files fathom did not write (they are kept; only
-    /// fathom's own files are replaced).
-    #[arg(long)]
-    pub(crate) force: bool,
+    #[command(flatten)]
+    pub(crate) output: ReplayOut,
 }
 
 /// What one replay command asks for.
@@ -175,23 +167,10 @@ pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
             &RangeBeacon,
             a.dir.as_deref(),
             a.config.as_deref(),
-            &a.out,
-            a.force,
+            &a.output,
         ),
-        ReplayData::InsDvl(a) => own(
-            &InsDvl,
-            a.dir.as_deref(),
-            a.config.as_deref(),
-            &a.out,
-            a.force,
-        ),
-        ReplayData::GnssIns(a) => own(
-            &GnssIns,
-            a.dir.as_deref(),
-            a.config.as_deref(),
-            &a.out,
-            a.force,
-        ),
+        ReplayData::InsDvl(a) => own(&InsDvl, a.dir.as_deref(), a.config.as_deref(), &a.output),
+        ReplayData::GnssIns(a) => own(&GnssIns, a.dir.as_deref(), a.config.as_deref(), &a.output),
         ReplayData::Ulog(a) => {
             if !a.file.is_file() {
                 return Err(Failure::Usage(anyhow!(
@@ -203,28 +182,27 @@ pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
                 exp: &GnssIns,
                 dir: Some(a.file.as_path()),
                 config: a.config.as_deref(),
-                out: a.out.clone().unwrap_or_else(|| replay_out(&GnssIns)),
-                force: a.force,
+                out: a.output.out.clone().unwrap_or_else(|| replay_out(&GnssIns)),
+                force: a.output.force,
             }
         }
     };
     replay(&request)
 }
 
-/// The request of an own-log replay (`dir`, `config`, `out`, `force` as given).
+/// The request of an own-log replay (`dir`, `config`, `output` as given).
 fn own<'a>(
     exp: &'static dyn DynExperiment,
     dir: Option<&'a Path>,
     config: Option<&'a Path>,
-    out: &Option<PathBuf>,
-    force: bool,
+    output: &ReplayOut,
 ) -> Request<'a> {
     Request {
         exp,
         dir,
         config,
-        out: out.clone().unwrap_or_else(|| replay_out(exp)),
-        force,
+        out: output.out.clone().unwrap_or_else(|| replay_out(exp)),
+        force: output.force,
     }
 }
 

@@ -10,7 +10,7 @@ use std::path::Path;
 
 use fathom_report::output::{Summary, read_summary_json};
 
-use crate::support::{fathom, read, repo_root, scratch};
+use crate::support::{fathom, read, repo_root, scratch, usage_error};
 
 fn ok(dir: &Path, args: &[&str]) -> String {
     let r = fathom(dir, args);
@@ -31,21 +31,6 @@ fn console_row(console: &str, method: &str, metric: &str) -> Option<(String, Str
 /// The shared `summary.json` of the output folder `dir`.
 fn summary(dir: &Path) -> Summary {
     read_summary_json(dir.join("summary.json")).expect("summary.json in the shared format")
-}
-
-/// Runs `args`, expects exit code 2 and one error line containing every `want`.
-fn usage_error(dir: &Path, args: &[&str], want: &[&str]) {
-    let r = fathom(dir, args);
-    assert_eq!(
-        r.code, 2,
-        "{args:?}: stdout {} stderr {}",
-        r.stdout, r.stderr
-    );
-    let line = r.stderr.trim_end();
-    assert_eq!(line.lines().count(), 1, "{line}");
-    for w in want {
-        assert!(line.contains(w), "{args:?}: `{w}` not in {line}");
-    }
 }
 
 #[test]

@@ -153,3 +153,18 @@ pub fn beacon_mission(
     .unwrap();
     (motion_params, suite)
 }
+
+/// Runs `args`, expects exit code 2 and one error line containing every `want`.
+pub fn usage_error(dir: &Path, args: &[&str], want: &[&str]) {
+    let r = fathom(dir, args);
+    assert_eq!(
+        r.code, 2,
+        "{args:?}: stdout {} stderr {}",
+        r.stdout, r.stderr
+    );
+    let line = r.stderr.trim_end();
+    assert_eq!(line.lines().count(), 1, "{line}");
+    for w in want {
+        assert!(line.contains(w), "{args:?}: `{w}` not in {line}");
+    }
+}

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 
 use fathom_report::output::{Summary, read_summary_json};
 
-use crate::support::{fathom, repo_root, scratch};
+use crate::support::{fathom, repo_root, scratch, usage_error};
 
 fn ulog(name: &str) -> PathBuf {
     repo_root().join("data/ulog").join(name)
@@ -144,21 +144,6 @@ fn hardware_gps_ins_agrees_with_ekf2_and_an_outage_shows_the_drift() {
         assert!(drift.is_finite() && max >= drift);
         // dead reckoning on this IMU record leaves EKF2's track far behind
         assert!(max > 10.0 * agreement[k], "{m}: {max} m");
-    }
-}
-
-/// Runs `args`, expects exit code 2 and one error line containing every `want`.
-fn usage_error(dir: &Path, args: &[&str], want: &[&str]) {
-    let r = fathom(dir, args);
-    assert_eq!(
-        r.code, 2,
-        "{args:?}: stdout {} stderr {}",
-        r.stdout, r.stderr
-    );
-    let line = r.stderr.trim_end();
-    assert_eq!(line.lines().count(), 1, "{line}");
-    for w in want {
-        assert!(line.contains(w), "{args:?}: `{w}` not in {line}");
     }
 }
 
