@@ -203,10 +203,14 @@ fn contents(out: &Path) -> Result<Contents, ReportError> {
         });
     let mut c = Contents::default();
     for (name, is_file) in names {
-        let own = is_file
-            && (name == RUN_INFO_FILE && info.is_some()
-                || legacy
-                || listed.is_some_and(|i| i.files.iter().any(|f| name == f.as_str())));
+        // A folder fathom wrote (a PILS session's `sim/`, `nav/`) is its own when the
+        // file list names it; an unlisted folder is the user's.
+        let in_list = listed.is_some_and(|i| i.files.iter().any(|f| name == f.as_str()));
+        let own = if is_file {
+            name == RUN_INFO_FILE && info.is_some() || legacy || in_list
+        } else {
+            in_list
+        };
         if own {
             c.own.push(name);
         } else {
@@ -607,6 +611,26 @@ mod tests {
             std::fs::read_to_string(out.join("notes.txt")).unwrap(),
             "mine"
         );
+    }
+
+    /// A folder fathom wrote into its output (a PILS session's `sim/`) is replaced by the
+    /// next run without --force; a folder of the user's is not (negative control).
+    #[test]
+    fn subfolders_fathom_wrote_are_its_own() {
+        let root = scratch("subfolders");
+        let out = root.join("out");
+        let o = OutDir::claim(&out, false).unwrap();
+        std::fs::create_dir_all(o.dir().join("sim")).unwrap();
+        std::fs::write(o.dir().join("sim/a.csv"), "1").unwrap();
+        o.commit(info()).unwrap();
+        let o = OutDir::claim(&out, false).unwrap();
+        std::fs::create_dir_all(o.dir().join("sim")).unwrap();
+        std::fs::write(o.dir().join("sim/a.csv"), "2").unwrap();
+        o.commit(info()).unwrap();
+        assert_eq!(std::fs::read_to_string(out.join("sim/a.csv")).unwrap(), "2");
+        std::fs::create_dir_all(out.join("mine")).unwrap();
+        let e = OutDir::claim(&out, false).unwrap_err().to_string();
+        assert!(e.contains("`mine`"), "{e}");
     }
 
     #[test]

@@ -152,6 +152,9 @@ fn pils_sessions_write_into_fathom_out() {
     ok(&root, &["pils", "p.toml"]);
     assert!(root.join("fathom-out/pils/sim/pils.json").is_file());
     assert!(root.join("fathom-out/pils/nav/nav.json").is_file());
+    // A second session replaces the first's folders (they are fathom's, not the user's).
+    ok(&root, &["pils", "p.toml"]);
+    assert!(root.join("fathom-out/pils/sim/pils.json").is_file());
     ok(&root, &["pils", "offline", "p.toml"]);
     let csv = std::fs::read_to_string(root.join("fathom-out/pils-offline/solutions.csv")).unwrap();
     assert!(csv.lines().count() > 100, "{csv}");
