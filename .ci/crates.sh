@@ -6,7 +6,8 @@
 #      only that crate's features, its examples built, its README doc-tested; for
 #      fathom-estimators `check --all-targets` and its doc tests, its unit tests having
 #      run in the workspace with the same features), and its examples run;
-#   2. `cargo package --list` of each crate ships its README and licence files;
+#   2. `cargo package --list` of each crate ships its README and licence files, and
+#      `cargo package --no-verify` of all of them succeeds;
 #   3. the library crates' API docs build with warnings as errors;
 #   4. a scratch project outside the workspace that depends on `fathom-estimators`
 #      alone (by path) builds and runs that crate's README example; its dependency
@@ -66,6 +67,15 @@ for c in "${LIBS[@]}"; do
   done
   echo "   $c: $(wc -l <<<"$list") files"
 done
+
+echo "== crates: cargo package of every library crate (path dependencies as registry versions)"
+# One call for all of them: cargo packages the crates in dependency order and resolves
+# each one's fathom dependencies against the others just packaged (its local overlay
+# registry), so this needs no publishing and holds although crates.io has unrelated
+# crates of some of these names (see README "Using one crate").
+pkg_args=()
+for c in "${LIBS[@]}"; do pkg_args+=(-p "$c"); done
+timed cargo package -q --no-verify --allow-dirty "${pkg_args[@]}"
 
 echo "== crates: API docs of the library crates with warnings as errors"
 doc_args=()
