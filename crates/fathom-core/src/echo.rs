@@ -124,7 +124,9 @@ impl Echo<'_> {
         if self.quoted_max == usize::MAX {
             return self.text.to_string();
         }
-        let parts: Vec<&str> = self.text.split('`').collect();
+        // a message: its numbers written out in full shortened first
+        let text = compact_numbers(self.text);
+        let parts: Vec<&str> = text.split('`').collect();
         let last = parts.len() - 1;
         let mut out = String::new();
         for (i, part) in parts.iter().enumerate() {
@@ -166,6 +168,48 @@ impl Display for Echo<'_> {
     }
 }
 
+/// Digits of a number written out in full beyond which [`compact_numbers`] writes it
+/// in scientific notation.
+pub const MAX_NUMBER_CHARS: usize = 20;
+
+/// `text` with every number written out in more than [`MAX_NUMBER_CHARS`] characters
+/// with a run of zeros (Rust prints `1e300` as 301 digits and `1e-300` as 302) in
+/// scientific notation
+/// (`1e300`, `1e-300`, `5.2e294`): the same value, read back exactly, in a message a
+/// person can read.
+///
+/// ```
+/// use fathom_core::echo::compact_numbers;
+///
+/// let m = format!("rate {} Hz, step {} s, 0.25 m", 1e300, 1e-300);
+/// assert_eq!(compact_numbers(&m), "rate 1e300 Hz, step 1e-300 s, 0.25 m");
+/// ```
+pub fn compact_numbers(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    let mut rest = text;
+    while let Some(start) = rest.find(|c: char| c.is_ascii_digit()) {
+        out.push_str(&rest[..start]);
+        let number = &rest[start..];
+        let len = number
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(number.len());
+        // a sentence's full stop after a number is not part of it
+        let digits = number[..len].trim_end_matches('.');
+        let after = &number[digits.len()..];
+        // (a long run of digits without zeros is an identifier, not a float written out)
+        let written_out = digits.len() > MAX_NUMBER_CHARS && digits.contains("00000");
+        match digits.parse::<f64>() {
+            Ok(x) if written_out && x.is_finite() => {
+                out.push_str(&format!("{x:e}"));
+            }
+            _ => out.push_str(digits),
+        }
+        rest = after;
+    }
+    out.push_str(rest);
+    out
+}
+
 /// A list as an error message shows it: see [`echo_list`].
 #[derive(Debug, Clone, Copy)]
 pub struct EchoList<'a, T>(&'a [T]);
@@ -194,6 +238,20 @@ impl<T: Display> Display for EchoList<'_, T> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn long_numbers_are_written_in_scientific_notation() {
+        let m = format!("a {} b {} c -{}.", 1e300, 1e-300, 123_456.5);
+        assert_eq!(compact_numbers(&m), "a 1e300 b 1e-300 c -123456.5.");
+        assert_eq!(compact_numbers("index 12, v1.2.3"), "index 12, v1.2.3");
+        let derived = format!("{}", 5.2e294_f64);
+        assert_eq!(compact_numbers(&derived), "5.2e294");
+        // the negative control: a 20-character number is kept as it is
+        let kept = "12345678901234567890";
+        assert_eq!(compact_numbers(kept), kept);
+        let id = "123456789123456789123456789";
+        assert_eq!(compact_numbers(id), id);
+    }
 
     #[test]
     fn short_values_are_unchanged() {

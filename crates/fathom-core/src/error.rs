@@ -110,8 +110,52 @@ pub fn ensure_non_negative(what: &str, value: f64) -> Result<(), CoreError> {
     Ok(())
 }
 
+/// An error about one named parameter, so that a front end can name the
+/// configuration key behind it (`fathom-sim` maps the name onto the keys of the
+/// scenario table the parameters came from).
+pub trait ParameterError: std::error::Error {
+    /// The parameter the error is about, as the error names it (`rate_hz`,
+    /// `imu.accel_bias_corr_time_s`, `mgpmf.grid_points[0]`), or `None` if it is not
+    /// about one parameter.
+    fn parameter(&self) -> Option<std::borrow::Cow<'_, str>>;
+}
+
+/// The name of element `index` of a value named `what`: when `what` ends in a
+/// comma-separated list of names (`vkf speed0, sf0, b0`), the `index`-th of them;
+/// else `what` with the index (`sigma0[2]`).
+pub fn element_name(what: &str, index: usize) -> std::borrow::Cow<'_, str> {
+    let names: Vec<&str> = what.split(", ").collect();
+    if names.len() > 1
+        && let Some(name) = names.get(index)
+    {
+        let last = name.rsplit(' ').next().unwrap_or(name);
+        return std::borrow::Cow::Borrowed(last);
+    }
+    std::borrow::Cow::Owned(format!("{what}[{index}]"))
+}
+
+impl ParameterError for CoreError {
+    fn parameter(&self) -> Option<std::borrow::Cow<'_, str>> {
+        match self {
+            CoreError::NonFinite { what, index, .. } => Some(element_name(what, *index)),
+            CoreError::OutOfRange { what, .. } => Some(what.as_str().into()),
+            _ => None,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
+    use super::element_name;
+
+    #[test]
+    fn element_names_pick_a_listed_name_or_index_the_value() {
+        assert_eq!(element_name("vkf speed0, sf0, b0", 2), "b0");
+        assert_eq!(element_name("vkf speed0, sf0, b0", 0), "speed0");
+        assert_eq!(element_name("nav sigma0", 1), "nav sigma0[1]");
+        assert_eq!(element_name("a, b", 5), "a, b[5]");
+    }
+
     use super::*;
 
     #[test]

@@ -39,7 +39,7 @@ pub mod raycast;
 pub mod time;
 pub mod units;
 
-pub use error::CoreError;
+pub use error::{CoreError, ParameterError};
 pub use gaussian::Gaussian;
 pub use measurement::{Measurement, SensorId};
 pub use raycast::{Material, Ray, RayCaster, RayHit};

@@ -218,6 +218,19 @@ pub(crate) fn check_finite_entries(
     Ok(())
 }
 
+impl fathom_core::ParameterError for EstimatorError {
+    fn parameter(&self) -> Option<std::borrow::Cow<'_, str>> {
+        match self {
+            EstimatorError::NonFinite { what, index, .. } => {
+                Some(fathom_core::error::element_name(what, *index))
+            }
+            EstimatorError::OutOfRange { what, .. } => Some(what.as_str().into()),
+            EstimatorError::Core(e) => fathom_core::ParameterError::parameter(e),
+            _ => None,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -125,6 +125,32 @@ impl BeaconsToml {
     }
 }
 
+/// Checks a sampling period against the timing jitter σ: more than 4 σ, so that
+/// sample times always increase (the sensor schedules' own rule), blamed on the
+/// period's key.
+///
+/// # Errors
+/// [`SimError::Invalid`] naming `key` and `timing.jitter_sigma_s`.
+pub fn require_period_over_jitter(
+    file: &str,
+    key: &str,
+    period: f64,
+    jitter_sigma: f64,
+) -> Result<(), SimError> {
+    if period > 4.0 * jitter_sigma {
+        return Ok(());
+    }
+    Err(SimError::invalid(
+        file,
+        key,
+        format!(
+            "must be more than 4 x timing.jitter_sigma_s = {} s so that sample times \
+             increase, got {period} s",
+            4.0 * jitter_sigma
+        ),
+    ))
+}
+
 /// Formats a number for Markdown with `decimals` decimals.
 pub fn f(x: f64, decimals: usize) -> String {
     format!("{x:.decimals$}")

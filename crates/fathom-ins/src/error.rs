@@ -66,3 +66,12 @@ pub(crate) fn check_finite(what: &'static str, values: &[f64]) -> Result<(), Ins
     }
     Ok(())
 }
+
+impl fathom_core::ParameterError for InsError {
+    fn parameter(&self) -> Option<std::borrow::Cow<'_, str>> {
+        match self {
+            InsError::Core(e) => fathom_core::ParameterError::parameter(e),
+            _ => None,
+        }
+    }
+}

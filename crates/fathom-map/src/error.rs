@@ -147,6 +147,24 @@ pub(crate) fn check_positive(field: &str, value: f64) -> Result<f64, MapError> {
     }
 }
 
+/// Smallest dimension of a preset world's feature, m: 10 cm. Below it a feature is
+/// thinner than the sensors modelled resolve and than the vehicle's own size, and a
+/// path that close to a surface grazes it.
+pub const MIN_FEATURE_M: f64 = 0.1;
+
+/// Checks a preset world's dimension: finite and at least [`MIN_FEATURE_M`].
+pub(crate) fn check_feature(field: &str, value: f64) -> Result<f64, MapError> {
+    if value.is_finite() && value >= MIN_FEATURE_M {
+        Ok(value)
+    } else {
+        Err(MapError::InvalidParameter {
+            field: field.to_owned(),
+            value,
+            reason: "must be finite and at least 0.1 m (MIN_FEATURE_M)",
+        })
+    }
+}
+
 /// Checks that `value` is finite.
 pub(crate) fn check_finite(field: &str, value: f64) -> Result<f64, MapError> {
     if value.is_finite() {
@@ -157,5 +175,14 @@ pub(crate) fn check_finite(field: &str, value: f64) -> Result<f64, MapError> {
             value,
             reason: "must be finite",
         })
+    }
+}
+
+impl fathom_core::ParameterError for MapError {
+    fn parameter(&self) -> Option<std::borrow::Cow<'_, str>> {
+        match self {
+            MapError::InvalidParameter { field, .. } => Some(field.as_str().into()),
+            _ => None,
+        }
     }
 }

@@ -8,7 +8,7 @@ use fathom_core::Material;
 use nalgebra::Vector3;
 use serde::{Deserialize, Serialize};
 
-use crate::error::{MapError, check_positive};
+use crate::error::{MapError, check_feature, check_positive};
 use crate::primitives::{FaceMaterials, aabb_box, ground_plane, slab, vertical_cylinder};
 use crate::{MeshBuilder, TriMesh};
 
@@ -91,7 +91,7 @@ pub struct Bridge {
 }
 
 impl BridgeParams {
-    /// Checks the dimensions: all finite and > 0, the path under the deck, the piers
+    /// Checks the dimensions: all finite and at least [`MIN_FEATURE_M`](crate::error::MIN_FEATURE_M), the path under the deck, the piers
     /// clear of the path and of each other, at most [`MAX_PIERS_PER_ROW`] per row.
     ///
     /// # Errors
@@ -109,7 +109,7 @@ impl BridgeParams {
             ("ground_margin_m", p.ground_margin_m),
             ("path_height_m", p.path_height_m),
         ] {
-            check_positive(f, v)?;
+            check_feature(f, v)?;
         }
         let bad = |field: &str, value: f64, reason| {
             Err(MapError::InvalidParameter {
@@ -305,7 +305,7 @@ pub struct Buildings {
 }
 
 impl BuildingsParams {
-    /// Checks the dimensions: all finite and > 0, a central building that fits
+    /// Checks the dimensions: all finite and at least [`MIN_FEATURE_M`](crate::error::MIN_FEATURE_M), a central building that fits
     /// (`2 clearance < side`), everything within 1e6 m.
     ///
     /// # Errors
@@ -320,7 +320,7 @@ impl BuildingsParams {
             ("central_height_m", p.central_height_m),
             ("ground_margin_m", p.ground_margin_m),
         ] {
-            check_positive(f, v)?;
+            check_feature(f, v)?;
             if v > 1e6 {
                 return Err(MapError::InvalidParameter {
                     field: f.into(),

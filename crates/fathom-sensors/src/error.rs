@@ -155,3 +155,14 @@ pub(crate) fn check_finite3(
     }
     Ok(*v)
 }
+
+impl fathom_core::ParameterError for SensorError {
+    fn parameter(&self) -> Option<std::borrow::Cow<'_, str>> {
+        match self {
+            SensorError::InvalidParameter { field, .. } => Some(field.as_str().into()),
+            SensorError::Core(e) => fathom_core::ParameterError::parameter(e),
+            SensorError::Traj(e) => fathom_core::ParameterError::parameter(e),
+            _ => None,
+        }
+    }
+}

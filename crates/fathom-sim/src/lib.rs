@@ -51,6 +51,7 @@
 //! - [`driver`]: the pipeline ([`run_paper`], one experiment into its output folder,
 //!   campaigns);
 //! - [`method_list`]: `methods = [...]` selections and method names;
+//! - [`parameter_key`]: the scenario key behind a parameter check's error.
 //! - [`user_run`]: `fathom run` / `fathom check` of any scenario file.
 
 pub mod cost;
@@ -59,6 +60,7 @@ pub mod error;
 pub mod experiment;
 pub mod method_list;
 pub mod montecarlo;
+pub mod parameter_key;
 pub mod progress;
 pub mod scenario;
 pub mod statistics;

@@ -331,6 +331,7 @@ pub const MAX_SIGMA: f64 = 1e6;
 pub const MAX_PSD: f64 = 1e12;
 
 /// Checks the magnitudes that hold for every scenario, whatever the experiment:
+/// every number with a decimal point or exponent finite and within [`MAX_ANY`],
 /// positions and lengths within [`MAX_LENGTH_M`], noise σ within [`MAX_SIGMA`], PSDs
 /// within [`MAX_PSD`] (by key name, see the units table of `docs/scenarios.md`).
 /// Values beyond them would make the geometry or the noise meaningless (a beacon at
@@ -365,10 +366,44 @@ fn walk_value(v: &toml::Value, key: &str, path: &str, file: &str) -> Result<(), 
             }
             Ok(())
         }
-        toml::Value::Float(x) => check_magnitude(*x, key, path, file),
+        // the key's own limit first (it says why), then the one of every number
+        toml::Value::Float(x) => {
+            check_magnitude(*x, key, path, file)?;
+            check_any_number(*x, path, file)
+        }
         toml::Value::Integer(i) => check_magnitude(*i as f64, key, path, file),
         _ => Ok(()),
     }
+}
+
+/// Largest magnitude of any number written with a decimal point or exponent in a
+/// scenario, whatever its unit: 10¹². No quantity of fathom's scenarios comes near
+/// it (the GNSS orbits are 2.7·10⁷ m, a week is 6·10⁵ s); beyond it a value is a
+/// slip, and one that overflows what it is multiplied with. Whole numbers (seeds,
+/// counts) have their own checks.
+pub const MAX_ANY: f64 = 1e12;
+
+/// Every number with a decimal point or exponent: finite (no scenario value means
+/// NaN or infinity) and within [`MAX_ANY`].
+fn check_any_number(x: f64, path: &str, file: &str) -> Result<(), SimError> {
+    if !x.is_finite() {
+        return Err(SimError::invalid(
+            file,
+            path,
+            format!("must be finite, got {x}"),
+        ));
+    }
+    if x.abs() > MAX_ANY {
+        return Err(SimError::invalid(
+            file,
+            path,
+            format!(
+                "must be at most {MAX_ANY:e} in magnitude, got {}: no quantity of a scenario is that large",
+                crate::cost::short(x)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn check_magnitude(x: f64, key: &str, path: &str, file: &str) -> Result<(), SimError> {
@@ -390,7 +425,6 @@ fn check_magnitude(x: f64, key: &str, path: &str, file: &str) -> Result<(), SimE
     } else {
         return Ok(());
     };
-    // NaN and infinities are left to the experiment's own range checks.
     if x.is_finite() && x.abs() > limit {
         return Err(SimError::invalid(
             file,
@@ -570,8 +604,19 @@ mod tests {
             let table = ScenarioDoc::parse(text, file).unwrap().table().unwrap();
             check_magnitudes(&table, file)
         };
-        let ok = "[a]\nx_m = 1e6\nsigma_m = 3.0\npositions = [[1.0, 2.0, 3.0]]\nn = 1e300\n";
+        let ok = "[a]\nx_m = 1e6\nsigma_m = 3.0\npositions = [[1.0, 2.0, 3.0]]\nn = 1e12\n";
         assert!(check_magnitudes(ok, "f").is_ok());
+        // any other number: finite and within MAX_ANY
+        for (text, key) in [
+            ("[a]\nn = 1.5e12\n", "a.n"),
+            ("[a]\nn = nan\n", "a.n"),
+            ("n = [1.0, -inf]\n", "n[1]"),
+        ] {
+            match check_magnitudes(text, "f") {
+                Err(SimError::Invalid { key_path, .. }) => assert_eq!(key_path, key, "{text}"),
+                other => panic!("{text}: {other:?}"),
+            }
+        }
         for (text, key) in [
             (
                 "[beacons]\npositions = [[0.0, 1e308, 0.0]]\n",
@@ -590,8 +635,11 @@ mod tests {
             // The value is shown short (`1.0e308`), not as 309 digits.
             assert!(e.len() < 200, "{e}");
         }
-        // Non-finite values are left to the range checks (which name them).
-        assert!(check_magnitudes("x_m = nan\n", "f").is_ok());
+        // Non-finite values are refused here too, naming the key.
+        let e = check_magnitudes("x_m = nan\n", "f")
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("key `x_m`: must be finite"), "{e}");
     }
 
     #[test]

@@ -135,6 +135,25 @@ pub fn check_scenario_text_with(
     registry: &[&'static dyn DynExperiment],
     limits: &Limits,
 ) -> Result<CheckedScenario, SimError> {
+    let env = Environment {
+        limits: *limits,
+        // Data looked up as `fathom run` looks it up: from the current directory.
+        ..Environment::new(std::env::current_dir().unwrap_or_else(|_| ".".into()))
+    };
+    check_scenario_text_in(text, file, registry, env)
+}
+
+/// [`check_scenario_text`] in `env`: its limits, its data folder (relative paths of
+/// the scenario are looked up from `env.base_dir`) and its extras.
+///
+/// # Errors
+/// As [`check_scenario_text`].
+pub fn check_scenario_text_in(
+    text: &str,
+    file: &str,
+    registry: &[&'static dyn DynExperiment],
+    env: Environment,
+) -> Result<CheckedScenario, SimError> {
     let job = Job {
         text,
         file,
@@ -142,11 +161,7 @@ pub fn check_scenario_text_with(
         seed: None,
         threads: None,
         progress: None,
-        env: Environment {
-            limits: *limits,
-            // Data looked up as `fathom run` looks it up: from the current directory.
-            ..Environment::new(std::env::current_dir().unwrap_or_else(|_| ".".into()))
-        },
+        env,
     };
     let (exp, assessed) = assess_scenario(&job, registry)?;
     let (keys, tables) = count_keys(&toml::Value::Table(assessed.table.clone()));
@@ -240,9 +255,10 @@ pub fn check_line(path: &Path, c: &CheckedScenario) -> String {
     )
 }
 
-/// `text` on one line (line breaks replaced by spaces).
+/// `text` on one line (line breaks replaced by spaces), its numbers written out in
+/// hundreds of digits in scientific notation ([`fathom_core::echo::compact_numbers`]).
 pub fn one_line(text: &str) -> String {
-    text.split_whitespace().collect::<Vec<_>>().join(" ")
+    fathom_core::echo::compact_numbers(&text.split_whitespace().collect::<Vec<_>>().join(" "))
 }
 
 fn count_keys(v: &toml::Value) -> (usize, usize) {

@@ -91,3 +91,13 @@ pub enum TrajError {
         phase: String,
     },
 }
+
+impl fathom_core::ParameterError for TrajError {
+    fn parameter(&self) -> Option<std::borrow::Cow<'_, str>> {
+        match self {
+            TrajError::InvalidParameter { field, .. } => Some(field.as_str().into()),
+            TrajError::Core(e) => fathom_core::ParameterError::parameter(e),
+            _ => None,
+        }
+    }
+}

@@ -97,6 +97,16 @@ pub(crate) fn finite_input(what: &str, values: &[f64], time: Time) -> Result<(),
     }
 }
 
+impl fathom_core::ParameterError for MapAidedError {
+    fn parameter(&self) -> Option<std::borrow::Cow<'_, str>> {
+        match self {
+            MapAidedError::InvalidParameter { field, .. } => Some(field.as_str().into()),
+            MapAidedError::Filter(e) => fathom_core::ParameterError::parameter(e),
+            _ => None,
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

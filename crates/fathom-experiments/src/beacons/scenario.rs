@@ -14,7 +14,7 @@ use super::filter::{EkfSettings, FilterSetup};
 use crate::common::{BeaconsToml, MotionToml, check_case_name};
 use fathom_sim::SimError;
 use fathom_sim::method_list::select;
-use fathom_sim::scenario::{require_non_negative, require_positive};
+use fathom_sim::scenario::{require_in_range, require_non_negative, require_positive};
 
 /// EKF range-beacon localization.
 ///
@@ -342,6 +342,15 @@ impl BeaconsScenario {
         let beacons = self.beacons.to_positions(file, "beacons")?;
         let t = &self.timing;
         require_non_negative(file, "timing.jitter_sigma_s", t.jitter_sigma_s)?;
+        for (key, period) in [
+            ("timing.sync_period_s", t.sync_period_s),
+            ("timing.dvl_period_s", t.dvl_period_s),
+            ("timing.ahrs_period_s", t.ahrs_period_s),
+            ("timing.range_period_s", t.range_period_s),
+            ("timing.depth_period_s", t.depth_period_s),
+        ] {
+            crate::common::require_period_over_jitter(file, key, period, t.jitter_sigma_s)?;
+        }
         for (key, v) in [
             ("timing.sync_period_s", t.sync_period_s),
             ("timing.dvl_period_s", t.dvl_period_s),
@@ -361,7 +370,8 @@ impl BeaconsScenario {
         require_non_negative(file, "noise.outlier_magnitude_m", n.outlier_magnitude_m)?;
         let e = &self.ekf;
         require_positive(file, "ekf.epoch_period_s", e.epoch_period_s)?;
-        require_positive(file, "ekf.gate_sigma", e.gate_sigma)?;
+        // its square is the gate: at least 1e-3 sigma, so that the square is a number
+        require_in_range(file, "ekf.gate_sigma", e.gate_sigma, 1e-3, 1e3)?;
         require_non_negative(file, "ekf.stale_tolerance_s", e.stale_tolerance_s)?;
         require_positive(file, "ekf.init_pos_sigma_m", e.init_pos_sigma_m)?;
         require_positive(file, "ekf.init_yaw_sigma_rad", e.init_yaw_sigma_rad)?;
@@ -418,12 +428,17 @@ impl BeaconsScenario {
                     "noise.outlier_count",
                     format!(
                         "{} outliers do not fit into the {range_samples} range samples of a run \
-                         of case `{}` ({} beacons x {} s / {} s); lower it or lengthen \
+                         of case `{}` ({} beacons x motion.duration_s = {} s / the range \
+                         period timing.{}_period_s = {} s); lower it or lengthen \
                          motion.duration_s",
                         n.outlier_count,
                         case.name,
                         beacons.len(),
                         self.motion.duration_s,
+                        match case.timing {
+                            TimingKind::Sync => "sync",
+                            TimingKind::Async => "range",
+                        },
                         range_period
                     ),
                 ));

@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use super::sim::{FilterTuning, Method, Reading, RunConfig};
 use fathom_sim::SimError;
 use fathom_sim::method_list::select;
+use fathom_sim::parameter_key::parameter_invalid;
 use fathom_sim::scenario::{require_non_negative, require_positive};
 
 /// INS + DVL fusion architectures.
@@ -354,7 +355,7 @@ impl FusionScenario {
         for (i, v) in m.leg_speeds_kt.iter().enumerate() {
             require_positive(file, &format!("mission.leg_speeds_kt[{i}]"), *v)?;
         }
-        let mission = FusionMissionParams {
+        let mission_params = FusionMissionParams {
             duration: m.duration_s,
             // Saturating: a count too large for the pattern is refused by `check`.
             n_knots: m.n_course_changes.saturating_mul(2).saturating_add(5),
@@ -368,9 +369,20 @@ impl FusionScenario {
             perturbation_sigma: m.perturbation_sigma_m,
             min_course_change: deg_to_rad(m.min_course_change_deg),
             check_dt: m.step_s,
+        };
+        if m.max_speed_kt <= m.min_speed_kt {
+            return Err(SimError::invalid(
+                file,
+                "mission.max_speed_kt",
+                format!(
+                    "must be above mission.min_speed_kt = {} kt, got {} kt",
+                    m.min_speed_kt, m.max_speed_kt
+                ),
+            ));
         }
-        .check()
-        .map_err(|e| SimError::invalid(file, "mission", e.to_string()))?;
+        let mission = mission_params
+            .check()
+            .map_err(|e| parameter_invalid(file, "mission", m, &e))?;
 
         let ins = InsParams {
             accel_bias_sigma: self.ins.accel_bias_sigma_mps2,
@@ -381,7 +393,7 @@ impl FusionScenario {
         let ins_params = ins;
         let ins = ins
             .check()
-            .map_err(|e| SimError::invalid(file, "ins", e.to_string()))?;
+            .map_err(|e| parameter_invalid(file, "ins", &self.ins, &e))?;
         let dvl_params = DvlDrParams {
             scale_half_width: self.dvl.scale_half_width,
             vel_noise_sigma: self.dvl.vel_noise_sigma_mps,
@@ -390,7 +402,7 @@ impl FusionScenario {
         require_non_negative(file, "dvl.vel_noise_sigma_mps", dvl_params.vel_noise_sigma)?;
         let dvl = dvl_params
             .check()
-            .map_err(|e| SimError::invalid(file, "dvl", e.to_string()))?;
+            .map_err(|e| parameter_invalid(file, "dvl", &self.dvl, &e))?;
 
         let f = &self.filters;
         let reading = match f.reading.as_str() {

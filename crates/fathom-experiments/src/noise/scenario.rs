@@ -169,6 +169,12 @@ impl NoiseScenario {
         }
         require_positive(file, "timing.period_s", self.timing.period_s)?;
         require_non_negative(file, "timing.jitter_sigma_s", self.timing.jitter_sigma_s)?;
+        crate::common::require_period_over_jitter(
+            file,
+            "timing.period_s",
+            self.timing.period_s,
+            self.timing.jitter_sigma_s,
+        )?;
         require_positive(file, "noise.range_sigma_m", self.noise.range_sigma_m)?;
         require_positive(file, "noise.depth_sigma_m", self.noise.depth_sigma_m)?;
         require_positive(file, "noise.corr_gap_s", self.noise.corr_gap_s)?;
@@ -206,8 +212,8 @@ impl NoiseScenario {
             if !case.gaussian && case.corr_sigma_m == 0.0 {
                 return Err(SimError::invalid(
                     file,
-                    key.clone(),
-                    "has no noise at all (gaussian = false and corr_sigma_m = 0)",
+                    format!("{key}.corr_sigma_m"),
+                    "is 0 with gaussian = false: the case has no noise at all",
                 ));
             }
             let params = BeaconSuiteParams {

@@ -24,6 +24,7 @@ use super::method::Method;
 use super::scenario::{BaroInverse, Ranging, UrbanScenario};
 use fathom_sim::SimError;
 use fathom_sim::method_list::select;
+use fathom_sim::parameter_key::parameter_invalid;
 use fathom_sim::scenario::{
     require_experiment, require_in_range, require_non_negative, require_positive,
 };
@@ -259,10 +260,13 @@ impl UrbanScenario {
         let quad = QuadrotorParams {
             wind,
             flight: FlightParams {
-                control_rate_hz: require_positive(
+                // the physics runs at twice this rate and needs at least 200 Hz
+                control_rate_hz: require_in_range(
                     file,
                     "vehicle.control_rate_hz",
                     v.control_rate_hz,
+                    100.0,
+                    10_000.0,
                 )?,
                 physics_substeps: 2,
                 rest_duration_s: rest_s,
@@ -271,7 +275,7 @@ impl UrbanScenario {
             ..QuadrotorParams::default()
         }
         .check()
-        .map_err(|e| model_err(file, "vehicle", e))?;
+        .map_err(|e| parameter_invalid(file, "vehicle", v, &e))?;
 
         let i = &self.imu;
         let imu_rate = require_positive(file, "imu.rate_hz", i.rate_hz)?;
@@ -286,7 +290,7 @@ impl UrbanScenario {
             ..AllanImuParams::adis16448()
         }
         .check()
-        .map_err(|e| model_err(file, "imu", e))?;
+        .map_err(|e| parameter_invalid(file, "imu", i, &e))?;
         let control_per_imu = every(file, "imu.rate_hz", v.control_rate_hz, imu_rate)?;
 
         let g = &self.gnss;
@@ -342,7 +346,7 @@ impl UrbanScenario {
         };
         gnss_params
             .check()
-            .map_err(|e| model_err(file, "gnss", e))?;
+            .map_err(|e| parameter_invalid(file, "gnss", g, &e))?;
 
         let b = &self.baro;
         let [h0, h1] = b.calibration_heights_m;
@@ -446,7 +450,7 @@ impl UrbanScenario {
             )?),
         }
         .check()
-        .map_err(|e| model_err(file, "filter", e))?;
+        .map_err(|e| parameter_invalid(file, "filter", f, &e))?;
         let reacquire = count_in(
             file,
             "filter.gps_reacquire_after_rejections",
@@ -466,7 +470,7 @@ impl UrbanScenario {
         };
         let range = range_params
             .check()
-            .map_err(|e| model_err(file, "filter", e))?;
+            .map_err(|e| parameter_invalid(file, "filter", f, &e))?;
         let zero_from = self
             .lidar
             .opaque_detection
@@ -523,7 +527,9 @@ impl UrbanScenario {
                 format!("must be in (1, 100], got {k}"),
             ));
         }
-        let grekf = grekf.check().map_err(|e| model_err(file, "filter", e))?;
+        let grekf = grekf
+            .check()
+            .map_err(|e| parameter_invalid(file, "filter", f, &e))?;
         let m = &self.mgpmf;
         let posterior = match m.posterior.as_deref() {
             None | Some("interpolated") => GridPosterior::Interpolated,
@@ -548,7 +554,7 @@ impl UrbanScenario {
         };
         let mgpmf = mgpmf_params
             .check()
-            .map_err(|e| model_err(file, "mgpmf", e))?;
+            .map_err(|e| parameter_invalid(file, "mgpmf", m, &e))?;
         let kernel = match self.particle.kernel.as_deref() {
             None | Some("roughening") => ParticleKernel::Roughening,
             Some("regularized") => ParticleKernel::Regularized,
@@ -569,7 +575,7 @@ impl UrbanScenario {
             ..ParticleParams::with_grid_budget(&mgpmf_params)
         }
         .check()
-        .map_err(|e| model_err(file, "particle", e))?;
+        .map_err(|e| parameter_invalid(file, "particle", &self.particle, &e))?;
         let s = &self.switch;
         if !(4..=64).contains(&s.min_los_satellites) {
             return Err(SimError::invalid(
@@ -587,7 +593,7 @@ impl UrbanScenario {
             min_dwell_s: s.min_dwell_s,
         }
         .check()
-        .map_err(|e| model_err(file, "switch", e))?;
+        .map_err(|e| parameter_invalid(file, "switch", s, &e))?;
         if m.lidar_beam_stride == 0 || m.lidar_beam_stride > lidar.beams().len() {
             return Err(SimError::invalid(
                 file,

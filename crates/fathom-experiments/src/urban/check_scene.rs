@@ -14,6 +14,7 @@ use fathom_map::presets::BridgeParams;
 use fathom_map::presets::Buildings;
 use fathom_map::presets::BuildingsParams;
 use fathom_sim::SimError;
+use fathom_sim::parameter_key::parameter_invalid;
 use fathom_sim::scenario::require_positive;
 
 /// Where a scenario's world comes from.
@@ -54,11 +55,11 @@ pub(super) fn model_err(file: &str, key: &str, e: impl std::fmt::Display) -> Sim
 }
 
 fn bridge(file: &str, key: &str, b: &BridgeParams) -> Result<Bridge, SimError> {
-    b.check().map_err(|e| model_err(file, key, e))
+    b.check().map_err(|e| parameter_invalid(file, key, b, &e))
 }
 
 fn buildings(file: &str, key: &str, b: &BuildingsParams) -> Result<Buildings, SimError> {
-    b.check().map_err(|e| model_err(file, key, e))
+    b.check().map_err(|e| parameter_invalid(file, key, b, &e))
 }
 
 pub(super) fn scene(

@@ -100,7 +100,8 @@ fn choose_satellites(checked: &Checked) -> Result<GnssReceiver, SimError> {
             "gnss.satellites",
             format!(
                 "{wanted} satellites requested, but only {} of the nominal constellation are \
-                 above the {} deg mask at t = 0 (gnss.epoch_offset_s = {} s, {} N {} E): \
+                 above the {} deg mask at t = 0 (gnss.epoch_offset_s = {} s, gnss.lat_deg = {}, \
+                 gnss.lon_deg = {}): \
                  request at most {}, or choose another epoch_offset_s",
                 up.len(),
                 g.elevation_mask_deg,

@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use fathom_sim::SimError;
 use fathom_sim::method_list::select;
+use fathom_sim::parameter_key::parameter_invalid;
 use fathom_sim::scenario::{require_in_range, require_non_negative, require_positive};
 
 /// The compared methods, in output order.
@@ -481,8 +482,9 @@ impl VkfScenario {
                 file,
                 "route.duration_s",
                 format!(
-                    "must be a whole number of IMU intervals and at least 200 of them, got {} s",
-                    r.duration_s
+                    "must be a whole number of IMU intervals (1 / route.imu_rate_hz = {} s) and \
+                     at least 200 of them, got {} s",
+                    dt, r.duration_s
                 ),
             ));
         }
@@ -505,6 +507,18 @@ impl VkfScenario {
                             format!("must be finite, got {v}"),
                         ));
                     }
+                }
+                require_positive(file, &format!("route.turns[{i}].ramp_s"), t.ramp_s)?;
+                if t.duration_s < 2.0 * t.ramp_s {
+                    return Err(SimError::invalid(
+                        file,
+                        format!("route.turns[{i}].duration_s"),
+                        format!(
+                            "must be at least 2 x route.turns[{i}].ramp_s = {} s, got {} s",
+                            2.0 * t.ramp_s,
+                            t.duration_s
+                        ),
+                    ));
                 }
                 Ok(Turn {
                     start: t.start_s,
@@ -533,7 +547,7 @@ impl VkfScenario {
         let imu_params = self.imu.to_params();
         let imu = imu_params
             .check()
-            .map_err(|e| SimError::invalid(file, "imu", e.to_string()))?;
+            .map_err(|e| parameter_invalid(file, "imu", &self.imu, &e))?;
 
         let v = &self.dvl;
         let sensor_every = integer_ratio(file, "dvl.rate_hz", r.imu_rate_hz, v.rate_hz)?;
@@ -542,6 +556,12 @@ impl VkfScenario {
             "dvl.literal_bias_half_width_mps",
             v.literal_bias_half_width_mps,
         )?;
+        require_non_negative(
+            file,
+            "dvl.scale_factor_half_width",
+            v.scale_factor_half_width,
+        )?;
+        require_non_negative(file, "dvl.bias_half_width_mps", v.bias_half_width_mps)?;
         let dvl_params = BottomLockDvlParams {
             scale_factor: RunConstantDist::Uniform {
                 half_width: v.scale_factor_half_width,
@@ -555,7 +575,7 @@ impl VkfScenario {
         };
         let dvl = dvl_params
             .check()
-            .map_err(|e| SimError::invalid(file, "dvl", e.to_string()))?;
+            .map_err(|e| parameter_invalid(file, "dvl", v, &e))?;
         let dvl_literal = BottomLockDvlParams {
             bias: RunConstantDist::Uniform {
                 half_width: v.literal_bias_half_width_mps,
@@ -567,7 +587,7 @@ impl VkfScenario {
         let echo = EchoSounder::new(self.echo_sounder.sigma_m)
             .map_err(|e| SimError::invalid(file, "echo_sounder.sigma_m", e.to_string()))?;
         let rpm = PropellerRpm::new(self.rpm.k_mps_per_rpm, self.rpm.b_mps, self.rpm.sigma_rpm)
-            .map_err(|e| SimError::invalid(file, "rpm", e.to_string()))?;
+            .map_err(|e| parameter_invalid(file, "rpm", &self.rpm, &e))?;
         let depth_sigma = require_positive(file, "depth_gauge.sigma_m", self.depth_gauge.sigma_m)?;
 
         let k = &self.vkf;

@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::range_beacon::LogDirToml;
 use fathom_sim::SimError;
 use fathom_sim::method_list::check_method_names;
+use fathom_sim::parameter_key::parameter_invalid;
 use fathom_sim::scenario::{
     require_experiment, require_in_range, require_non_negative, require_positive,
 };
@@ -233,7 +234,7 @@ impl GnssInsToml {
             accel_bias_random_walk_mps2_per_sqrt_s: i.accel_bias_random_walk_mps2_per_sqrt_s,
         }
         .check()
-        .map_err(|e| SimError::invalid(file, "imu", e.to_string()))?;
+        .map_err(|e| parameter_invalid(file, "imu", i, &e))?;
         let gbrw = require_non_negative(
             file,
             "imu.gyro_bias_random_walk_radps_per_sqrt_s",

@@ -19,6 +19,7 @@ pub mod __private {
     };
     pub use fathom_estimators::velocity_filter::{VelocityFilterConfig, VelocityFilterParams};
     pub use fathom_sim::SimError;
+    pub use fathom_sim::parameter_key::parameter_invalid_aliased;
 }
 
 /// A settings table's struct with the derives and the strictness of every scenario
@@ -112,8 +113,8 @@ macro_rules! vkf_toml {
             /// (m/s) and the revolution noise `rpm_sigma` (rpm).
             ///
             /// # Errors
-            /// `SimError::Invalid` naming the table `vkf` when the filter refuses the
-            /// values.
+            /// `SimError::Invalid` naming the key of the value the filter refuses
+            /// (the table `vkf` for the initial speed).
             pub fn velocity_filter_config(
                 &self,
                 file: &str,
@@ -136,10 +137,16 @@ macro_rules! vkf_toml {
                 }
                 .check()
                 .map_err(|e| {
-                    $crate::ins_dvl::filter_tables::__private::SimError::invalid(
+                    $crate::ins_dvl::filter_tables::__private::parameter_invalid_aliased(
                         file,
                         "vkf",
-                        e.to_string(),
+                        self,
+                        &e,
+                        &[
+                            ("sigma0[0]", "sigma_speed0_mps"),
+                            ("sigma0[1]", "sigma_sf0"),
+                            ("sigma0[2]", "sigma_b0_mps"),
+                        ],
                     )
                 })
             }
@@ -211,7 +218,7 @@ macro_rules! nav_filter_toml {
             ///
             /// # Errors
             /// `SimError::Invalid` naming `nav_filter.accel_bias_frame` for another
-            /// spelling, or the table `nav_filter` when the filter refuses the values.
+            /// spelling, or the key of the value the filter refuses.
             pub fn integrated_nav_config(
                 &self,
                 file: &str,
@@ -243,7 +250,19 @@ macro_rules! nav_filter_toml {
                     },
                 }
                 .check()
-                .map_err(|e| SimError::invalid(file, "nav_filter", e.to_string()))
+                .map_err(|e| {
+                    $crate::ins_dvl::filter_tables::__private::parameter_invalid_aliased(
+                        file,
+                        "nav_filter",
+                        self,
+                        &e,
+                        &[
+                            ("sigma0[0]", "sigma0_pos_m"),
+                            ("sigma0[1]", "sigma0_vel_mps"),
+                            ("sigma0[2]", "sigma0_accel_bias_mps2"),
+                        ],
+                    )
+                })
             }
         }
     };

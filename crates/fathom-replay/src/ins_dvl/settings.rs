@@ -14,6 +14,7 @@ use serde::{Deserialize, Serialize};
 use crate::range_beacon::{LogDirToml, OutputToml};
 use fathom_sim::SimError;
 use fathom_sim::method_list::check_method_names;
+use fathom_sim::parameter_key::parameter_invalid;
 use fathom_sim::scenario::{
     require_experiment, require_in_range, require_non_negative, require_positive,
 };
@@ -309,7 +310,7 @@ impl InsDvlToml {
             },
         }
         .check()
-        .map_err(|e| SimError::invalid(file, "imu", e.to_string()))?;
+        .map_err(|e| parameter_invalid(file, "imu", i, &e))?;
         let bias_sigma0 = [accel_bias.hypot(accel_bi), gyro_bias.hypot(gyro_bi)];
         for (k, v) in [
             ("imu.accel_bias_mg", bias_sigma0[0]),
