@@ -65,7 +65,7 @@ impl FaultParams {
         ] {
             if !(0.0..1.0).contains(&p) {
                 return Err(PilsError::setting(
-                    format!("faults.{name}"),
+                    format!("link.faults.{name}"),
                     p,
                     "must be in [0, 1)",
                 ));
@@ -74,7 +74,7 @@ impl FaultParams {
         for (name, s) in [("latency_s", self.latency_s), ("jitter_s", self.jitter_s)] {
             if !(0.0..10.0).contains(&s) {
                 return Err(PilsError::setting(
-                    format!("faults.{name}"),
+                    format!("link.faults.{name}"),
                     s,
                     "must be in [0, 10) s",
                 ));

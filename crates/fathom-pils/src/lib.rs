@@ -93,7 +93,8 @@ impl PilsError {
     ) -> Self {
         Self::Setting {
             field: field.into(),
-            value: value.to_string(),
+            // a number written out in hundreds of digits, shown as 1e300
+            value: fathom_core::echo::compact_numbers(&value.to_string()),
             reason: reason.into(),
         }
     }

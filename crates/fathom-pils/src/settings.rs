@@ -25,7 +25,7 @@ pub enum Pacing {
 pub struct LinkParams {
     /// Pacing.
     pub pacing: Pacing,
-    /// Silence after which either side gives up, s.
+    /// Silence after which either side gives up, s (0.001 ... 600).
     pub timeout_s: f64,
     /// Lockstep: resend a step's messages after this long without its solution, s.
     pub retransmit_s: f64,
@@ -183,18 +183,19 @@ impl LinkParams {
     /// [`PilsError::Setting`] naming the field.
     pub fn check(&self) -> Result<(), PilsError> {
         let l = self;
-        if !(l.timeout_s > 0.0 && l.timeout_s <= 600.0) {
+        // below 1 ms no answer can come back, even on loopback
+        if !(l.timeout_s >= 1e-3 && l.timeout_s <= 600.0) {
             return Err(PilsError::setting(
                 "link.timeout_s",
                 l.timeout_s,
-                "must be in (0, 600]",
+                "must be in [0.001, 600] s",
             ));
         }
         if !(l.retransmit_s > 0.0 && l.retransmit_s < l.timeout_s) {
             return Err(PilsError::setting(
                 "link.retransmit_s",
                 l.retransmit_s,
-                "must be in (0, timeout_s)",
+                format!("must be in (0, link.timeout_s = {} s)", l.timeout_s),
             ));
         }
         if l.signing_passphrase.as_deref() == Some("") {

@@ -331,7 +331,8 @@ pub const MAX_SIGMA: f64 = 1e6;
 pub const MAX_PSD: f64 = 1e12;
 
 /// Checks the magnitudes that hold for every scenario, whatever the experiment:
-/// every number with a decimal point or exponent finite and within [`MAX_ANY`],
+/// every number with a decimal point or exponent finite, within [`MAX_ANY`] and 0 or
+/// at least [`MIN_ANY`],
 /// positions and lengths within [`MAX_LENGTH_M`], noise σ within [`MAX_SIGMA`], PSDs
 /// within [`MAX_PSD`] (by key name, see the units table of `docs/scenarios.md`).
 /// Values beyond them would make the geometry or the noise meaningless (a beacon at
@@ -383,14 +384,32 @@ fn walk_value(v: &toml::Value, key: &str, path: &str, file: &str) -> Result<(), 
 /// counts) have their own checks.
 pub const MAX_ANY: f64 = 1e12;
 
+/// Smallest magnitude of a nonzero number with a decimal point or exponent in a
+/// scenario: 10⁻¹⁰⁰. The smallest quantities of fathom's scenarios (spectral
+/// densities of bias random walks) are near 10⁻¹⁴; below 10⁻¹⁰⁰ a value is a slip, and
+/// its square (a variance) underflows towards 0. Zero itself is left to the keys'
+/// own checks.
+pub const MIN_ANY: f64 = 1e-100;
+
 /// Every number with a decimal point or exponent: finite (no scenario value means
-/// NaN or infinity) and within [`MAX_ANY`].
+/// NaN or infinity), within [`MAX_ANY`], and 0 or at least [`MIN_ANY`].
 fn check_any_number(x: f64, path: &str, file: &str) -> Result<(), SimError> {
     if !x.is_finite() {
         return Err(SimError::invalid(
             file,
             path,
             format!("must be finite, got {x}"),
+        ));
+    }
+    if x != 0.0 && x.abs() < MIN_ANY {
+        return Err(SimError::invalid(
+            file,
+            path,
+            format!(
+                "must be 0 or at least {MIN_ANY:e} in magnitude, got {}: its square \
+                 underflows (write 0 where zero is meant)",
+                crate::cost::short(x)
+            ),
         ));
     }
     if x.abs() > MAX_ANY {
@@ -610,6 +629,7 @@ mod tests {
         for (text, key) in [
             ("[a]\nn = 1.5e12\n", "a.n"),
             ("[a]\nn = nan\n", "a.n"),
+            ("[a]\nn = -1e-300\n", "a.n"),
             ("n = [1.0, -inf]\n", "n[1]"),
         ] {
             match check_magnitudes(text, "f") {

@@ -16,7 +16,7 @@ use fathom_sim::experiment::{Environment, Extras};
 use fathom_sim::user_run::{check_scenario_text_in, one_line};
 use fathom_sim::{SimError, error_chain};
 
-use crate::support::repo_root;
+use crate::support::{fathom, repo_root, scratch};
 
 /// The values of the issue, written as TOML: integers where the key is an integer
 /// (a float there is a type error, which must name the key as well).
@@ -209,9 +209,8 @@ fn try_file(file: &str, text: &str, env: &Environment, tally: &mut Tally) {
     }
 }
 
-/// The settings files under `scenarios/` (all but the PILS ones, which `fathom check`
-/// handles in the binary).
-fn settings_files() -> Vec<(String, String)> {
+/// The settings files under `scenarios/` with their `experiment` key.
+fn all_settings_files() -> Vec<(String, String)> {
     let dir = repo_root().join("scenarios");
     let mut files: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
@@ -225,10 +224,19 @@ fn settings_files() -> Vec<(String, String)> {
             let name = format!("scenarios/{}", p.file_name().unwrap().to_string_lossy());
             (name, std::fs::read_to_string(&p).unwrap())
         })
-        .filter(|(_, text)| {
-            let t: toml::Table = toml::from_str(text).unwrap();
-            t.get("experiment").and_then(|v| v.as_str()) != Some("pils")
-        })
+        .collect()
+}
+
+fn is_pils(text: &str) -> bool {
+    let t: toml::Table = toml::from_str(text).unwrap();
+    t.get("experiment").and_then(|v| v.as_str()) == Some("pils")
+}
+
+/// The settings files but the PILS ones (which `fathom check` handles in the binary).
+fn settings_files() -> Vec<(String, String)> {
+    all_settings_files()
+        .into_iter()
+        .filter(|(_, text)| !is_pils(text))
         .collect()
 }
 
@@ -266,5 +274,69 @@ fn every_numeric_key_set_absurd_is_refused_naming_it_or_runs() {
         tally.failures.len(),
         tally.variants,
         tally.failures.join("\n")
+    );
+}
+
+/// The PILS settings through `fathom check` (checked by the binary before any socket):
+/// each numeric key as written set to each absurd value, in a copy of `scenarios/`
+/// (the settings name the urban scenario beside them).
+#[test]
+fn every_numeric_pils_key_set_absurd_is_refused_naming_it_or_checks() {
+    let dir = scratch("every-pils-key");
+    let src = repo_root().join("scenarios");
+    for entry in std::fs::read_dir(&src).unwrap() {
+        let path = entry.unwrap().path();
+        if path.is_file() {
+            std::fs::copy(&path, dir.join("scenarios").join(path.file_name().unwrap())).unwrap();
+        }
+    }
+    let worlds = dir.join("scenarios/worlds");
+    std::fs::create_dir_all(&worlds).unwrap();
+    for entry in std::fs::read_dir(src.join("worlds")).unwrap() {
+        let path = entry.unwrap().path();
+        std::fs::copy(&path, worlds.join(path.file_name().unwrap())).unwrap();
+    }
+    let (mut variants, mut refused, mut failures) = (0, 0, Vec::new());
+    for (file, text) in all_settings_files().into_iter().filter(|(_, t)| is_pils(t)) {
+        let table: toml::Table = toml::from_str(&text).unwrap();
+        let mut found = Vec::new();
+        leaves(&toml::Value::Table(table.clone()), "", &[], &mut found);
+        assert!(!found.is_empty(), "{file}: no numeric key found");
+        for leaf in &found {
+            for value in ABSURD {
+                variants += 1;
+                let variant = toml::to_string(&replaced(
+                    &table,
+                    &leaf.steps,
+                    value_of(value, leaf.integer),
+                ))
+                .unwrap();
+                std::fs::write(dir.join("scenarios/variant.toml"), &variant).unwrap();
+                let ran = fathom(&dir, &["check", "--quiet", "scenarios/variant.toml"]);
+                let line = ran.stderr.trim();
+                let wanted = without_indices(&leaf.path);
+                match ran.code {
+                    0 => {}
+                    2 if line.lines().count() == 1 && without_indices(line).contains(&wanted) => {
+                        refused += 1;
+                    }
+                    code => failures.push(format!(
+                        "{file}: {} = {value}: exit {code}: {line}",
+                        leaf.path
+                    )),
+                }
+            }
+        }
+    }
+    println!("PILS: {variants} variants, {refused} refused");
+    assert!(
+        refused > 0,
+        "no PILS variant was refused: the test tried nothing"
+    );
+    assert!(
+        failures.is_empty(),
+        "{} PILS variants are not refused as the user's mistake naming the key:\n{}",
+        failures.len(),
+        failures.join("\n")
     );
 }

@@ -7,7 +7,7 @@ use serde::{Deserialize, Serialize};
 
 use fathom_data::plaza::RangeOrder;
 use fathom_sim::SimError;
-use fathom_sim::scenario::{require_non_negative, require_positive};
+use fathom_sim::scenario::{require_in_range, require_non_negative, require_positive};
 
 /// Range-beacon localization on real data.
 ///
@@ -211,7 +211,8 @@ pub struct RobustToml {
 pub struct SchemesToml {
     /// Sync epoch period of SC and SI (paper B's AS / SC / SI reading).
     ///
-    /// Unit: s. Range: > 0.
+    /// Unit: s. Range: 0.001 ... 3600 (every epoch is a filter update: a shorter
+    /// period multiplies the updates, not the information).
     pub epoch_s: f64,
 }
 
@@ -421,7 +422,7 @@ impl SharedTuning<'_> {
             reject_sigma,
             recovery_after: rb.recovery_after,
             recovery_inflation: rb.recovery_inflation,
-            epoch: require_positive(file, "schemes.epoch_s", self.schemes.epoch_s)?,
+            epoch: require_in_range(file, "schemes.epoch_s", self.schemes.epoch_s, 1e-3, 3600.0)?,
             ablation_scheme: UpdateScheme::SynchronousCollective,
             hard_gate_sigma: 1.0,
         })

@@ -58,6 +58,8 @@ fn settings_parse_and_bad_values_name_the_key() {
             "robust.reject_sigma",
         ),
         ("epoch_s = 0.1", "epoch_s = 0.0", "schemes.epoch_s"),
+        // an epoch of 1 ns would run a replay for days: refused, naming the key
+        ("epoch_s = 0.1", "epoch_s = 1e-9", "schemes.epoch_s"),
         ("epoch_s = 0.1", "epoch_s = 0.1\nextra = 1", "schemes.extra"),
     ] {
         let text = preset().replace(from, to);

@@ -12,7 +12,9 @@ use crate::plaza::{
 };
 use fathom_sim::SimError;
 use fathom_sim::method_list::check_method_names;
-use fathom_sim::scenario::{require_experiment, require_non_negative, require_positive};
+use fathom_sim::scenario::{
+    require_experiment, require_in_range, require_non_negative, require_positive,
+};
 
 /// Range-beacon localization on your own log.
 ///
@@ -126,7 +128,8 @@ pub struct OutputToml {
     /// Without `truth.csv`: the estimates are recorded every this many seconds from
     /// the start (with truth: at every truth row after the start).
     ///
-    /// Unit: s. Range: > 0.
+    /// Unit: s. Range: 0.001 ... 86400 (a shorter period than 1 ms records nothing a
+    /// log's sensors resolve, and would only multiply the rows).
     pub period_s: f64,
 }
 
@@ -318,7 +321,13 @@ impl RangeBeaconToml {
                 .map(|v| require_positive(file, "dvl.heading_sigma_rad", v))
                 .transpose()?,
             depth_sigma: require_positive(file, "depth.sigma_m", self.depth.sigma_m)?,
-            output_period: require_positive(file, "output.period_s", self.output.period_s)?,
+            output_period: require_in_range(
+                file,
+                "output.period_s",
+                self.output.period_s,
+                1e-3,
+                86_400.0,
+            )?,
             methods,
         })
     }
