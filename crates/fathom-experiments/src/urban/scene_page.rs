@@ -12,15 +12,13 @@ use fathom_report::scene::{
 
 use super::method::Method;
 use super::record::{ScanSnapshot, SceneDetail, SkySnapshot};
-#[cfg(doc)]
-use super::run::Flown;
 use super::sense::SensorEpoch;
 use super::world::Prepared;
 use fathom_ins::local_level::LocalTruthSample;
 use fathom_sim::SimError;
 
 /// A flight's scans from `from_s` on (`truth` at the IMU rate, `sensed[j - 1]` the
-/// data of sample `j`, as [`Flown`] holds them), at most [`MAX_SCANS`] of them with
+/// data of sample `j`, as `run::Flown` holds them), at most [`MAX_SCANS`] of them with
 /// at most [`MAX_HITS`] returns each (the page's limits).
 pub fn scans(truth: &[LocalTruthSample], sensed: &[SensorEpoch], from_s: f64) -> Vec<ScanSnapshot> {
     let all: Vec<(usize, &[super::sense::BeamReturn])> = sensed
