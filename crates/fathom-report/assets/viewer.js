@@ -187,8 +187,10 @@
     ex.textContent = 'beams: yellow; satellites: green in view, red blocked';
     legendEl.appendChild(ex);
     slider.max = Math.max(0, s.times.length - 1);
-    camera.position.set(cx + span * 0.5, box.max[1] + span * 0.45, cz + span * 0.7);
-    controls.target.set(cx, (box.min[1] + box.max[1]) / 2, cz);
+    // A three-quarter view from above the path, high enough to clear the world's top.
+    var ty = (box.min[1] + box.max[1]) / 2;
+    camera.position.set(cx + span * 0.55, Math.max(ty + span * 0.8, worldBox.max[1] + span * 0.3), cz + span * 0.85);
+    controls.target.set(cx, ty, cz);
     controls.update();
     setEpoch(0);
   }
