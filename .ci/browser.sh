@@ -47,4 +47,26 @@ docs=()
 [ -n "${FATHOM_SCENE_DOCS:-}" ] && docs=(docs/img)
 FATHOM_NODE_MODULES="$work/node_modules" CHROMIUM="$CHROMIUM" \
   node .ci/scene-page.cjs "$page" "$work" "${docs[@]}"
+
+# Negative controls: the same test on sabotaged copies of the page must fail (a page
+# that draws nothing; a page that logs an error), or the checks above prove nothing.
+control() {
+  local name=$1 want=$2 copy="$work/control-$1.html"
+  shift 2
+  "$@" <"$page" >"$copy"
+  if FATHOM_NODE_MODULES="$work/node_modules" CHROMIUM="$CHROMIUM" \
+    node .ci/scene-page.cjs "$copy" "$work/control-$name" >"$work/control-$name.log" 2>&1; then
+    echo "negative control '$name' passed the test: the test cannot fail" >&2
+    exit 1
+  fi
+  grep -q "$want" "$work/control-$name.log" || {
+    echo "negative control '$name' failed for another reason:" >&2
+    cat "$work/control-$name.log" >&2
+    exit 1
+  }
+  echo "negative control '$name': refused ($want)"
+}
+control blank "looks blank" sed 's/renderer.render(scene3, camera);/renderer.clear();/'
+control console-error "console error" sed 's|</body>|<script>console.error("planted")</script></body>|'
+
 echo "scene page in Chromium: OK in $(($(date +%s) - start)) s"

@@ -11,7 +11,7 @@
 'use strict';
 const path = require('path');
 const fs = require('fs');
-const modules = process.env.FATHOM_NODE_MODULES || path.resolve('target/browser-test/node_modules');
+const modules = path.resolve(process.env.FATHOM_NODE_MODULES || 'target/browser-test/node_modules');
 const { chromium } = require(path.join(modules, 'playwright-core'));
 
 const [pagePath, outDir, docsDir] = process.argv.slice(2);
