@@ -49,7 +49,8 @@ FATHOM_NODE_MODULES="$work/node_modules" CHROMIUM="$CHROMIUM" \
   node .ci/scene-page.cjs "$page" "$work" "${docs[@]}"
 
 # Negative controls: the same test on sabotaged copies of the page must fail (a page
-# that draws nothing; a page that logs an error), or the checks above prove nothing.
+# that draws nothing; a page that logs an error; a page whose modes never switch), or
+# the checks above prove nothing.
 control() {
   local name=$1 want=$2 copy="$work/control-$1.html"
   shift 2
@@ -68,5 +69,6 @@ control() {
 }
 control blank "looks blank" sed 's/renderer.render(scene3, camera);/renderer.clear();/'
 control console-error "console error" sed 's|</body>|<script>console.error("planted")</script></body>|'
+control no-switch "never enters the map-aided mode" sed 's/mode: arr(m.mode)/mode: new Uint8Array(m.mode.n)/'
 
 echo "scene page in Chromium: OK in $(($(date +%s) - start)) s"
