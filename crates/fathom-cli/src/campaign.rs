@@ -68,6 +68,8 @@ pub(crate) fn run_shard_cmd(args: &RunArgs, shard: Shard) -> Result<String, Fail
         progress: Some(run_hook(bar.clone(), true)),
         env: Environment {
             limits: args.limits.limits()?,
+            // A shard's run 0 keeps what the merged page draws, unless --no-scene.
+            scene_page: !args.no_scene,
             ..Environment::new(crate::current_dir()?)
         },
     };

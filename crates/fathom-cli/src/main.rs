@@ -12,6 +12,7 @@
 //! fathom log check <DIR>
 //! fathom merge <SHARD DIRS...> [--out DIR] [--force]
 //! fathom pils FILE | pils sim|nav|offline|compare FILE [--out DIR]
+//! fathom view DIR [--no-open]
 //! ```
 //!
 //! **Where outputs go**, for every command: `fathom-out/<name>/` in the current
@@ -93,6 +94,7 @@ mod pils;
 mod pils_compare;
 mod pils_session;
 mod replay;
+mod view;
 
 use std::io::{IsTerminal, Write as _};
 use std::path::PathBuf;
@@ -159,6 +161,9 @@ enum Command {
     /// Processor-in-the-loop: the simulator and the navigation as two processes over
     /// UDP with MAVLink 2 (`fathom pils FILE`, or `fathom pils sim|nav|offline`).
     Pils(pils::PilsArgs),
+    /// Print the path of an output folder's 3D scene page (`scene.html`, written by
+    /// every run with a world) and open it in a browser where one is available.
+    View(view::ViewArgs),
 }
 
 /// The limits a scenario's estimated cost must fit.
@@ -206,6 +211,9 @@ struct RunArgs {
     /// its claims (by default only the paper's setup gets them).
     #[arg(long, conflicts_with = "shard")]
     paper_extras: bool,
+    /// Do not write the 3D scene page `scene.html` (runs with a world write it).
+    #[arg(long)]
+    no_scene: bool,
     /// Run only shard K of M of every batch and write its records and manifest into
     /// `--out` (no analysis; `fathom merge` combines the shards).
     #[arg(long, value_name = "K/M", value_parser = parse_shard)]
@@ -287,6 +295,7 @@ fn run_scenario_cmd(args: &RunArgs) -> Result<String, Failure> {
         } else {
             Extras::WhenPaper
         },
+        scene_page: !args.no_scene,
     };
     // Assessed once (scenario, overrides, cost against the limits) before anything
     // runs; the estimate is printed first. The bar stays hidden until a batch starts.
@@ -508,6 +517,7 @@ fn run(cli: &Cli) -> Result<String, Failure> {
         Command::Merge(args) => merge_cmd(args),
         Command::Campaign(kind) => campaign_cmd(kind),
         Command::Pils(args) => pils::pils_cmd(args),
+        Command::View(args) => view::view_cmd(args),
     }
 }
 

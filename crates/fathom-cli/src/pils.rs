@@ -45,6 +45,9 @@ pub(crate) struct Pick {
     /// The run index (run `N` of `fathom run`: its flight, noise and initial error).
     #[arg(long, value_name = "N")]
     pub(crate) run: Option<u64>,
+    /// Do not write the 3D scene page `scene.html` (the simulator side writes it).
+    #[arg(long)]
+    pub(crate) no_scene: bool,
 }
 
 #[derive(Debug, Subcommand)]
@@ -133,6 +136,7 @@ fn load(path: &Path, pick: &Pick) -> Result<Settings, Failure> {
     if let Some(r) = pick.run {
         s.file.run = r;
     }
+    s.scene_page = !pick.no_scene;
     Ok(s)
 }
 

@@ -104,6 +104,7 @@ fn seed_on_a_deterministic_experiment_and_huge_seeds_are_usage_errors() {
         force: false,
         limits: Limits::default(),
         extras: Default::default(),
+        scene_page: true,
     };
     let reg = registry();
     let e = run_scenario(&options, &reg).unwrap_err();

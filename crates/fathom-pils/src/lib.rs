@@ -22,6 +22,7 @@
 //! | [`report`] | evaluation, offline references, a session's output files (`summary.json` in the shared contract) |
 //! | [`compare`] | lockstep vs realtime over runs: paired differences with CIs, the study's files |
 //! | [`figures`] | a session's and the study's figures as SVG text |
+//! | [`scene`] | a simulator session as the 3D scene page (`scene.html`) |
 
 pub mod assemble;
 pub mod codec;
@@ -35,6 +36,7 @@ pub mod link;
 pub mod nav;
 pub mod raw_gnss;
 pub mod report;
+pub mod scene;
 pub mod session;
 pub mod settings;
 pub mod sim;

@@ -117,6 +117,7 @@ pub fn simulate_prepared(
     };
     let pils = (!o.solutions.is_empty()).then(|| evaluate(run, &o.solutions));
     let (mut oq, mut of, mut equal, mut diff) = (None, None, None, Default::default());
+    let mut offline_f64 = None;
     // A failed session is not compared (and ends quickly: within the timeout).
     if offline_refs && o.error.is_none() {
         let q = offline(fl, run, true)?;
@@ -130,6 +131,7 @@ pub fn simulate_prepared(
             .error_3d
             .push(("offline, f64", error_3d_series(run, &f)));
         of = Some(fs);
+        offline_f64 = Some(f);
         if let Some(p) = &pils {
             diff = p
                 .metrics()
@@ -172,7 +174,14 @@ pub fn simulate_prepared(
         difference_to_offline: diff,
         equal_to_offline_quantized: equal,
     };
-    let files = sim_files(&report, &o.solutions, fl.seed, fl.run)?;
+    let mut files = sim_files(&report, &o.solutions, fl.seed, fl.run)?;
+    if s.scene_page && !o.solutions.is_empty() {
+        let mut tracks = vec![("PILS", &o.solutions)];
+        if let Some(f) = &offline_f64 {
+            tracks.push(("offline", f));
+        }
+        files.push(("scene.html", crate::scene::scene_page(fl, run, &tracks)?));
+    }
     Ok(Session {
         report,
         files,

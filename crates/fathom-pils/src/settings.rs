@@ -83,6 +83,9 @@ pub struct Settings {
     pub scenario_path: PathBuf,
     /// The scenario's `base_seed` (the link's fault streams are seeded from it).
     pub seed: u64,
+    /// Whether the simulator side writes the 3D scene page `scene.html` (`--no-scene`:
+    /// no; not a key of the file).
+    pub scene_page: bool,
 }
 
 /// Largest settings or scenario file read, bytes.
@@ -163,6 +166,7 @@ impl Settings {
             scenario_text,
             scenario_path,
             seed,
+            scene_page: true,
         })
     }
 

@@ -307,6 +307,7 @@ pub fn run(
                 force: false,
                 limits: fathom_sim::cost::Limits::default(),
                 extras: Default::default(),
+                scene_page: true,
             };
             let (result, _) = py
                 .detach(|| {

@@ -6,6 +6,7 @@
 //! - [`csv_writer`]: the one CSV writer ([`CsvWriter`](csv_writer::CsvWriter), a
 //!   `csv::Writer` with fathom's settings) every CSV file goes through;
 //! - [`plot`]: SVG line, plan-view, histogram, heat-map and sample-time figures;
+//! - [`scene`]: the self-contained 3D scene page (`scene.html`, three.js inlined);
 //! - [`outdir`]: the output folder that never loses work ([`OutDir`](outdir::OutDir):
 //!   claim before computing, atomic commit, `run_info.json`).
 //!
@@ -22,5 +23,6 @@ pub mod error;
 pub mod outdir;
 pub mod output;
 pub mod plot;
+pub mod scene;
 
 pub use error::ReportError;

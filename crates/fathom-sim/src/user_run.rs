@@ -301,6 +301,9 @@ pub struct RunOptions {
     pub limits: Limits,
     /// When the paper's sensitivity batches and claims run (`--paper-extras`: always).
     pub extras: Extras,
+    /// Whether a run with a world writes its 3D scene page `scene.html`
+    /// (`--no-scene`: no).
+    pub scene_page: bool,
 }
 
 /// Check, then run a user's scenario file with its experiment; writes the experiment's
@@ -374,6 +377,7 @@ pub fn job_of<'a>(
         env: Environment {
             limits: options.limits,
             extras: options.extras,
+            scene_page: options.scene_page,
             ..Environment::new(options.base_dir.clone())
         },
     }

@@ -26,6 +26,7 @@ mod pils;
 mod plaza;
 mod quadrotor_ins;
 mod report_text;
+mod scene_page;
 mod smoother;
 mod statistics;
 mod ulog;

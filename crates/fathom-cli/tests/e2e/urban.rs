@@ -195,7 +195,7 @@ fn user_scenario(body: &str) -> String {
     format!("{head}\n{body}\n")
 }
 
-fn block(world: &str, waypoints: &str) -> String {
+pub(crate) fn block(world: &str, waypoints: &str) -> String {
     user_scenario(&format!(
         "[[scenarios]]\nname = \"block\"\nranging = \"rangefinders\"\n\n\
          [scenarios.world]\nfile = \"{world}\"\naxes = \"enu_z_up\"\n\n\
@@ -204,9 +204,9 @@ fn block(world: &str, waypoints: &str) -> String {
 }
 
 /// Rest at the first waypoint, climb to 10 m, fly 60 m north past the building.
-const GOOD_PATH: &str = "[[0.0, -30.0, 0.5], [0.0, -30.0, 10.0], [0.0, 30.0, 10.0]]";
+pub(crate) const GOOD_PATH: &str = "[[0.0, -30.0, 0.5], [0.0, -30.0, 10.0], [0.0, 30.0, 10.0]]";
 
-fn setup(dir: &Path) {
+pub(crate) fn setup(dir: &Path) {
     let world = std::fs::read(crate::support::repo_root().join(BLOCK_OBJ)).unwrap();
     std::fs::write(dir.join("block.obj"), world).unwrap();
     std::fs::write(dir.join("empty.obj"), "v 0 0 0\nv 1 0 0\nv 0 1 0\n").unwrap();

@@ -22,6 +22,7 @@
 //! | [`run`], [`closed_loop`] | one run |
 //! | [`record`] | records, kept values, the batch fold |
 //! | `analysis`, [`claims`], `figures`, `report`, `paper` | rows, claims, SVG, notes, the printed numbers |
+//! | [`scene_page`] | run 0 as the 3D scene page (`scene.html`) |
 
 mod analysis;
 pub mod check;
@@ -39,6 +40,7 @@ mod report;
 pub mod run;
 pub mod runner;
 pub mod scenario;
+pub mod scene_page;
 pub mod sense;
 mod settings;
 pub mod trace;
@@ -148,6 +150,12 @@ impl Experiment for Urban {
             return Err(SimError::invalid_argument("urban", "no main batch"));
         };
         figures::write(prep, main_fold, out)?;
+        if prep.scene_page
+            && let Some(detail) = &main_fold.detail
+        {
+            let title = format!("urban: {} scenario(s), run 0", prep.scenes.len());
+            out.page("scene.html", scene_page::page(prep, detail, &title)?)?;
+        }
         report::write(prep, main, out);
         Ok(())
     }

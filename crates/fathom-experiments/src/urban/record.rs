@@ -185,6 +185,22 @@ pub struct SceneDetail {
     pub scan: Option<ScanSnapshot>,
     /// The MGPMF grid at mid-flight.
     pub grid: Option<GridSnapshot>,
+    /// Scans over the flight, thinned for the scene page (`scene.html`).
+    #[serde(default)]
+    pub scans: Vec<ScanSnapshot>,
+    /// GNSS epochs over the flight, thinned for the scene page.
+    #[serde(default)]
+    pub sky: Vec<SkySnapshot>,
+}
+
+/// The satellites above the mask at one GNSS epoch, seen from the true position.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct SkySnapshot {
+    /// Time, s.
+    pub time: f64,
+    /// Per satellite: unit direction from the receiver (NED) and whether the true
+    /// position sees it.
+    pub sats: Vec<([f64; 3], bool)>,
 }
 
 impl SceneDetail {
@@ -217,6 +233,8 @@ impl SceneDetail {
             gnss,
             scan,
             grid,
+            scans: Vec::new(),
+            sky: Vec::new(),
         }
     }
 }

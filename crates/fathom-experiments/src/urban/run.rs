@@ -197,7 +197,7 @@ pub(super) fn main_run(
                 .map(|(t, e)| {
                     ScanSnapshot::of(t, e.ranges.as_ref().map_or(&[][..], |r| &r.returns))
                 });
-            details.push(SceneDetail::new(
+            let mut d = SceneDetail::new(
                 &flown.truth,
                 start,
                 prep.checked.steps.eval,
@@ -205,7 +205,13 @@ pub(super) fn main_run(
                 gnss,
                 scan,
                 grid,
-            ));
+            );
+            if prep.scene_page {
+                let from = d.times.first().copied().unwrap_or(0.0);
+                d.scans = super::scene_page::scans(&flown.truth, &flown.epochs, from);
+                d.sky = super::scene_page::sky(prep, &flown.truth, &flown.epochs, from);
+            }
+            details.push(d);
         }
     }
     Ok(RunRecord {

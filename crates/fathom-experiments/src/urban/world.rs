@@ -47,6 +47,9 @@ pub struct Prepared {
     pub scenes: Vec<PreparedScene>,
     /// The GNSS receiver with the chosen satellites.
     pub receiver: GnssReceiver,
+    /// Whether run 0 keeps its scans and satellites and the analysis writes
+    /// `scene.html` (`fathom run --no-scene`: no).
+    pub scene_page: bool,
 }
 
 /// Builds everything the runs share.
@@ -64,6 +67,7 @@ pub fn prepare(checked: Checked, env: &Environment) -> Result<Prepared, SimError
         checked,
         scenes,
         receiver,
+        scene_page: env.scene_page,
     })
 }
 

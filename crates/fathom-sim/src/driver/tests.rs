@@ -324,6 +324,7 @@ fn a_run_a_check_and_a_shard_parse_the_scenario_text_once() {
         force: false,
         limits: crate::cost::Limits::default(),
         extras: Default::default(),
+        scene_page: true,
     };
     let mine = |seen: &[String]| seen.iter().filter(|l| *l == "dummy.toml").count();
     // The preset is parsed too (the setup comparison), never the user's text again.

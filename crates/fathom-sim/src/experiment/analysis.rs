@@ -212,6 +212,14 @@ impl Analysis {
         self.file(name, "svg", FileContent::Text(content))
     }
 
+    /// Adds the self-contained HTML page `name` (the 3D scene page).
+    ///
+    /// # Errors
+    /// A bad name.
+    pub fn page(&mut self, name: &str, html: String) -> Result<(), SimError> {
+        self.file(name, "html", FileContent::Text(html))
+    }
+
     /// Adds the CSV file `name` from equal-length numeric columns
     /// ([`fathom_report::output::csv_columns_text`]).
     ///

@@ -159,6 +159,9 @@ pub struct Environment {
     /// When the paper's extras run: its sensitivity batches (see
     /// [`Experiment::main_only`]) and its claims.
     pub extras: Extras,
+    /// Whether an experiment with a world writes its 3D scene page `scene.html`
+    /// (`fathom run --no-scene`: no).
+    pub scene_page: bool,
 }
 
 /// When an experiment runs what belongs to its paper rather than to a scenario: the
@@ -181,6 +184,7 @@ impl Environment {
             base_dir: base_dir.into(),
             limits: Limits::default(),
             extras: Extras::default(),
+            scene_page: true,
         }
     }
 }
