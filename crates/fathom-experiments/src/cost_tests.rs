@@ -59,7 +59,7 @@ const BOMBS: [(&str, &str, &str, &str); 12] = [
         "duration_s = 1e9",
         "mission.duration_s",
     ),
-    ("fusion", "step_s =", "step_s = 1e-300", "mission.step_s"),
+    ("fusion", "step_s =", "step_s = 1e-9", "mission.step_s"),
     (
         "fusion",
         "histogram_bins =",
@@ -85,10 +85,10 @@ const BOMBS: [(&str, &str, &str, &str); 12] = [
         "duration_s = 1e9",
         "motion.duration_s",
     ),
-    ("beacons", "step_s =", "step_s = 1e-300", "motion.step_s"),
+    ("beacons", "step_s =", "step_s = 1e-9", "motion.step_s"),
     ("beacons", "runs =", "runs = 1000000000000", "runs"),
     ("vkf", "runs =", "runs = 1000000000000", "runs"),
-    ("noise", "step_s =", "step_s = 1e-300", "motion.step_s"),
+    ("noise", "step_s =", "step_s = 1e-9", "motion.step_s"),
     ("noise", "runs =", "runs = 1000000000000", "runs"),
 ];
 

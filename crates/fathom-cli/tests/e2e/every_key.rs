@@ -265,8 +265,15 @@ fn every_numeric_key_set_absurd_is_refused_naming_it_or_runs() {
         tally.slowest.1,
         tally.accepted.len()
     );
-    for (file, what, _) in &tally.accepted {
+    // FATHOM_EVERY_KEY_DUMP=DIR writes each accepted variant there (to run them)
+    let dump = std::env::var_os("FATHOM_EVERY_KEY_DUMP").map(std::path::PathBuf::from);
+    for (i, (file, what, variant)) in tally.accepted.iter().enumerate() {
         println!("accepted: {file}: {what}");
+        if let Some(dir) = &dump {
+            std::fs::create_dir_all(dir).unwrap();
+            let name = format!("{i:04}.toml");
+            std::fs::write(dir.join(&name), format!("# {file}: {what}\n{variant}")).unwrap();
+        }
     }
     assert!(
         tally.failures.is_empty(),
