@@ -5,6 +5,10 @@
 //! in), so a key the preset leaves to its default is tried too; of an array of
 //! numbers the first and the last element are tried.
 //!
+//! The accepted variants are run by `.ci/every-key-runs.sh` (release build, about
+//! 5 min; each must exit 0 with finite values in its summary.json), which reads them
+//! from `FATHOM_EVERY_KEY_DUMP`.
+//!
 //! The check runs in process through the same function as `fathom check`
 //! ([`check_scenario_text_in`]); PILS settings, checked by the binary's own code,
 //! through `fathom check`. The slowest refusal is printed (tests never assert
