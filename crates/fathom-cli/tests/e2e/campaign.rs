@@ -168,7 +168,21 @@ fn broken_merges_are_refused_with_one_line_and_nothing_written() {
         m.replace("corr_gap_s = 1.0", "corr_gap_s = 2.0"),
     )
     .unwrap();
+    // A copy of shard 0 whose manifest lost a field (exit 2 like a truncated one).
+    std::fs::create_dir_all(dir.join("f")).unwrap();
+    copy_files(&dir.join(&s[0]), &dir.join("f"));
+    let m = std::fs::read_to_string(dir.join("f/manifest.json")).unwrap();
+    let line = m
+        .lines()
+        .find(|l| l.trim_start().starts_with("\"fathom_version\""))
+        .unwrap();
+    std::fs::write(
+        dir.join("f/manifest.json"),
+        m.replacen(&format!("{line}\n"), "", 1),
+    )
+    .unwrap();
     for (args, needle) in [
+        (vec!["f", s[1].as_str()], "missing field `fathom_version`"),
         (vec!["e", s[1].as_str()], "`scenario_sha256`"),
         (vec!["e", s[1].as_str()], "shard `e`"),
         (vec![s[0].as_str()], "missing shard"),

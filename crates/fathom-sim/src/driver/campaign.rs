@@ -257,11 +257,13 @@ pub fn run_assessed_shard(
 /// Reads a shard's manifest.
 ///
 /// # Errors
-/// I/O or JSON errors naming the file.
+/// I/O or JSON errors naming the file; a manifest that is not one (truncated, a
+/// field missing or of the wrong type) is the user's file ([`SimError::Input`]).
 pub fn read_manifest(dir: &Path) -> Result<Manifest, SimError> {
     let path = dir.join("manifest.json");
     let text = std::fs::read_to_string(&path).map_err(|e| SimError::io("read", &path, e))?;
-    serde_json::from_str(&text).map_err(|e| SimError::Json { path, source: e })
+    serde_json::from_str(&text)
+        .map_err(|e| SimError::Input(Box::new(SimError::Json { path, source: e })))
 }
 
 /// The shards' manifests checked against each other: same experiment, scenario,

@@ -853,11 +853,13 @@ impl<E: Experiment> Runnable for Typed<'_, E> {
                         format!("expected run {i}, found run {}", found.index),
                     ));
                 }
-                let record: E::Record =
-                    serde_json::from_str(&found.json).map_err(|e| SimError::Json {
+                // a record the user gave us that is not one: the user's file
+                let record: E::Record = serde_json::from_str(&found.json).map_err(|e| {
+                    SimError::Input(Box::new(SimError::Json {
                         path: found.origin.clone().into(),
                         source: e,
-                    })?;
+                    }))
+                })?;
                 k.push(exp.fold(&prepared, b, i, record, &mut fold));
             }
             if let Some(extra) = source.next(b)? {
