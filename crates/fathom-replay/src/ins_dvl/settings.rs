@@ -437,13 +437,7 @@ impl InsDvlToml {
                 3600.0,
             )?,
             sigma0_att: pos("eskf.sigma0_att_rad", self.eskf.sigma0_att_rad)?,
-            output_period: require_in_range(
-                file,
-                "output.period_s",
-                self.output.period_s,
-                1e-3,
-                86_400.0,
-            )?,
+            output_period: self.output.period(file)?,
             methods,
         })
     }

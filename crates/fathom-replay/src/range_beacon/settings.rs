@@ -133,6 +133,16 @@ pub struct OutputToml {
     pub period_s: f64,
 }
 
+impl OutputToml {
+    /// `period_s`, checked.
+    ///
+    /// # Errors
+    /// [`SimError::Invalid`] naming `output.period_s` outside 0.001 ... 86400 s.
+    pub fn period(&self, file: &str) -> Result<f64, SimError> {
+        require_in_range(file, "output.period_s", self.period_s, 1e-3, 86_400.0)
+    }
+}
+
 /// One `[[methods]]` entry of a range-beacon replay.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
@@ -321,13 +331,7 @@ impl RangeBeaconToml {
                 .map(|v| require_positive(file, "dvl.heading_sigma_rad", v))
                 .transpose()?,
             depth_sigma: require_positive(file, "depth.sigma_m", self.depth.sigma_m)?,
-            output_period: require_in_range(
-                file,
-                "output.period_s",
-                self.output.period_s,
-                1e-3,
-                86_400.0,
-            )?,
+            output_period: self.output.period(file)?,
             methods,
         })
     }
