@@ -367,12 +367,12 @@ fn walk_value(v: &toml::Value, key: &str, path: &str, file: &str) -> Result<(), 
             }
             Ok(())
         }
-        // the key's own limit first (it says why), then the one of every number
+        // the magnitude (the key's own limit, else MAX_ANY), then finite and not tiny
         toml::Value::Float(x) => {
-            check_magnitude(*x, key, path, file)?;
+            check_magnitude(*x, key, true, path, file)?;
             check_any_number(*x, path, file)
         }
-        toml::Value::Integer(i) => check_magnitude(*i as f64, key, path, file),
+        toml::Value::Integer(i) => check_magnitude(*i as f64, key, false, path, file),
         _ => Ok(()),
     }
 }
@@ -392,7 +392,8 @@ pub const MAX_ANY: f64 = 1e12;
 pub const MIN_ANY: f64 = 1e-100;
 
 /// Every number with a decimal point or exponent: finite (no scenario value means
-/// NaN or infinity), within [`MAX_ANY`], and 0 or at least [`MIN_ANY`].
+/// NaN or infinity) and 0 or at least [`MIN_ANY`] (its upper limit is
+/// [`check_magnitude`]'s).
 fn check_any_number(x: f64, path: &str, file: &str) -> Result<(), SimError> {
     if !x.is_finite() {
         return Err(SimError::invalid(
@@ -412,20 +413,13 @@ fn check_any_number(x: f64, path: &str, file: &str) -> Result<(), SimError> {
             ),
         ));
     }
-    if x.abs() > MAX_ANY {
-        return Err(SimError::invalid(
-            file,
-            path,
-            format!(
-                "must be at most {MAX_ANY:e} in magnitude, got {}: no quantity of a scenario is that large",
-                crate::cost::short(x)
-            ),
-        ));
-    }
     Ok(())
 }
 
-fn check_magnitude(x: f64, key: &str, path: &str, file: &str) -> Result<(), SimError> {
+/// The largest magnitude of the value at `key`: by the key's name, else, for a number
+/// with a decimal point or exponent (`float`), [`MAX_ANY`]; whole numbers (seeds,
+/// counts) have their own checks.
+fn check_magnitude(x: f64, key: &str, float: bool, path: &str, file: &str) -> Result<(), SimError> {
     let (limit, what) = if key.contains("sigma") {
         (
             MAX_SIGMA,
@@ -441,6 +435,8 @@ fn check_magnitude(x: f64, key: &str, path: &str, file: &str) -> Result<(), SimE
             MAX_LENGTH_M,
             "positions and lengths beyond 1e7 m (more than the Earth's radius) make ranges meaningless",
         )
+    } else if float {
+        (MAX_ANY, "no quantity of a scenario is that large")
     } else {
         return Ok(());
     };
