@@ -10,6 +10,9 @@
 //! message), which the regression test compares with the `.expected` file stored
 //! beside each regression input.
 
+#[cfg(fuzzing)]
+pub mod heap_cap;
+
 use fathom_core::{Material, RayCaster};
 use fathom_data::layout::gnss_ins::GnssInsLog;
 use fathom_data::layout::{FileSet, LogKind, Manifest};
