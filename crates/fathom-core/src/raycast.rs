@@ -136,8 +136,9 @@ pub struct BatchLengthMismatch {
 /// Closest-hit ray casting against a static map (see the module rules).
 ///
 /// Implementations are read-only (`&self`) and use the calling thread only: the
-/// Monte Carlo runner owns the threads, and one caster is shared by all of them.
-pub trait RayCaster {
+/// Monte Carlo runner owns the threads, and one caster is shared by all of them (and
+/// by the scoped threads of a grid or particle update), hence `Sync`.
+pub trait RayCaster: Sync {
     /// The closest hit of the ray `origin_in_nav + t dir_in_nav`,
     /// `MIN_RANGE < t <= max_range`, or `None` (no hit, or an invalid ray).
     fn cast(

@@ -3,7 +3,8 @@
 //! a 109-beam lidar scan (UST-20LX: -135..135 deg by 2.5 deg, 60 m) in the `buildings`
 //! east corridor; one MGPMF update with a 41 x 41 x 9 grid and 7 beams (6 horizontal
 //! at 60 deg + 1 down) on `buildings` (target <= 25 ms); one particle-filter update at
-//! the same ray count (15129 particles x 7 beams). `map_aided_rays/*` cast the same
+//! the same ray count (15129 particles x 7 beams); the MGPMF update again on two
+//! threads (the scaling). `map_aided_rays/*` cast the same
 //! number of rays from the same kind of poses through `cast_batch` alone, so
 //! `cargo xtask bench` reports the ns per ray cast inside each update and the share of
 //! the update the casts take. Run with `cargo xtask bench map_aided`; see
@@ -170,6 +171,20 @@ fn map_aided(c: &mut Criterion) {
             let mut f = f0.clone();
             black_box(
                 mgpmf
+                    .update(&mut f, &est, black_box(&beams), None, &caster)
+                    .unwrap(),
+            )
+        })
+    });
+    // the same update on two threads (`Mgpmf::set_threads`; same result): the
+    // scaling, where the single-thread figure above stays the benchmark
+    let mut mgpmf_2 = Mgpmf::new(grid.check().unwrap());
+    mgpmf_2.set_threads(2).unwrap();
+    g.bench_function("mgpmf_41x41x9_7beams_2threads", |b| {
+        b.iter(|| {
+            let mut f = f0.clone();
+            black_box(
+                mgpmf_2
                     .update(&mut f, &est, black_box(&beams), None, &caster)
                     .unwrap(),
             )

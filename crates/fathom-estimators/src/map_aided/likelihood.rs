@@ -28,16 +28,24 @@
 //! slightly correlated; the per-beam robust tail needs the factorization).
 //!
 //! Rays go through [`RayCaster::cast_batch`] in chunks of [`CHUNK_POINTS`] candidates
-//! (buffers reused across updates).
+//! (buffers reused across updates). With more than one thread
+//! ([`LikelihoodWorkers::set_threads`]) the chunks are split into contiguous ranges,
+//! one per scoped thread; each candidate's value is computed by the same code whatever
+//! thread computes it and the totals are integer counts, so the result is
+//! bit-identical for every thread count.
 
 use fathom_core::{Ray, RayCaster, RayHit};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
+use super::MapAidedError;
 use super::ins12::NominalNav;
 use super::range_model::{BaroHeight, RangeBeam};
 
 /// Candidates per batch of ray casts.
 pub const CHUNK_POINTS: usize = 256;
+
+/// The most threads one likelihood evaluation may use.
+pub const MAX_THREADS: usize = 256;
 
 /// Smallest `|o . u|` used in a likelihood row (a grazing hit's row is large, not
 /// infinite).
@@ -71,11 +79,57 @@ pub(crate) struct RayBuffers {
     hits: Vec<Option<RayHit>>,
 }
 
+/// The threads of the likelihood evaluations of one filter and their ray buffers
+/// (reused across updates; one set of buffers per thread).
+#[derive(Debug, Clone)]
+pub(crate) struct LikelihoodWorkers {
+    threads: usize,
+    buffers: Vec<RayBuffers>,
+}
+
+impl Default for LikelihoodWorkers {
+    fn default() -> Self {
+        Self {
+            threads: 1,
+            buffers: vec![RayBuffers::default()],
+        }
+    }
+}
+
+impl LikelihoodWorkers {
+    /// The number of threads an evaluation may use.
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// Sets the number of threads, `1..=MAX_THREADS` (`field` names it in the error).
+    pub fn set_threads(&mut self, field: &str, threads: usize) -> Result<(), MapAidedError> {
+        if !(1..=MAX_THREADS).contains(&threads) {
+            return Err(MapAidedError::InvalidParameter {
+                field: field.to_string(),
+                value: threads as f64,
+                expected: "1 ..= 256 threads",
+            });
+        }
+        self.threads = threads;
+        Ok(())
+    }
+}
+
 /// Totals of one evaluation.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub(crate) struct LikelihoodStats {
     pub rays: usize,
     pub hits: usize,
+}
+
+impl LikelihoodStats {
+    fn add(self, other: Self) -> Self {
+        Self {
+            rays: self.rays + other.rays,
+            hits: self.hits + other.hits,
+        }
+    }
 }
 
 impl LikelihoodModel<'_> {
@@ -91,8 +145,47 @@ impl LikelihoodModel<'_> {
     }
 
     /// Writes the log-likelihood of every candidate of `points` into `out`
-    /// (`out.len() == points.len()`).
+    /// (`out.len() == points.len()`), on the workers' threads (module docs).
     pub fn evaluate(
+        &self,
+        points: &[Vector3<f64>],
+        out: &mut [f64],
+        workers: &mut LikelihoodWorkers,
+        caster: &dyn RayCaster,
+    ) -> LikelihoodStats {
+        let chunks = points.len().div_ceil(CHUNK_POINTS);
+        let threads = workers.threads.min(chunks).max(1);
+        if workers.buffers.len() < threads {
+            workers.buffers.resize_with(threads, RayBuffers::default);
+        }
+        if threads == 1 {
+            return self.evaluate_on(points, out, &mut workers.buffers[0], caster);
+        }
+        let per_thread = chunks.div_ceil(threads) * CHUNK_POINTS;
+        std::thread::scope(|scope| {
+            let mut parts = points
+                .chunks(per_thread)
+                .zip(out.chunks_mut(per_thread))
+                .zip(workers.buffers.iter_mut());
+            let first = parts.next();
+            let spawned: Vec<_> = parts
+                .map(|((p, o), buf)| scope.spawn(move || self.evaluate_on(p, o, buf, caster)))
+                .collect();
+            let mut stats = first.map_or_else(LikelihoodStats::default, |((p, o), buf)| {
+                self.evaluate_on(p, o, buf, caster)
+            });
+            for handle in spawned {
+                match handle.join() {
+                    Ok(s) => stats = stats.add(s),
+                    Err(panic) => std::panic::resume_unwind(panic),
+                }
+            }
+            stats
+        })
+    }
+
+    /// [`Self::evaluate`] on the calling thread.
+    fn evaluate_on(
         &self,
         points: &[Vector3<f64>],
         out: &mut [f64],
@@ -275,8 +368,8 @@ mod tests {
             Vector3::new(0.7, -0.4, 0.05),
         ];
         let mut out = [0.0; 3];
-        let mut buf = RayBuffers::default();
-        let st = m.evaluate(&pts, &mut out, &mut buf, &map);
+        let mut workers = LikelihoodWorkers::default();
+        let st = m.evaluate(&pts, &mut out, &mut workers, &map);
         assert_eq!(st.rays, 18);
         assert!(out[0] > out[1] + 10.0 && out[0] > out[2], "{out:?}");
         // the linear-domain product equals the sum of the logs of the robust terms

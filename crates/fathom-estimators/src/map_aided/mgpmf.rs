@@ -28,7 +28,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use super::error::MapAidedError;
 use super::ins12::{Ins12Filter, NominalNav};
-use super::likelihood::{RayBuffers, model};
+use super::likelihood::{LikelihoodWorkers, model};
 use super::marginal::{
     LinearStep, LinearStepReport, Partition, normalize_log_weights, weighted_moments,
 };
@@ -65,7 +65,7 @@ pub struct Mgpmf {
     log_w: Vec<f64>,
     weights: Vec<f64>,
     dirs: Vec<Vector3<f64>>,
-    rays: RayBuffers,
+    workers: LikelihoodWorkers,
     linear: LinearStep,
 }
 
@@ -79,9 +79,27 @@ impl Mgpmf {
             log_w: Vec::with_capacity(n),
             weights: Vec::with_capacity(n),
             dirs: Vec::new(),
-            rays: RayBuffers::default(),
+            workers: LikelihoodWorkers::default(),
             linear: LinearStep::default(),
         }
+    }
+
+    /// The number of threads the likelihood of the grid points is evaluated on (1, the
+    /// default, is the calling thread only).
+    pub fn threads(&self) -> usize {
+        self.workers.threads()
+    }
+
+    /// Evaluates the likelihood of the grid points on `threads` scoped threads
+    /// (contiguous ranges of them, [`super::likelihood`]): the result is bit-identical
+    /// for every thread count, only faster where cores are free. The Monte Carlo
+    /// runner already runs one run per core, so this is for single runs (a replay, the
+    /// navigation process of PILS).
+    ///
+    /// # Errors
+    /// [`MapAidedError::InvalidParameter`] (`threads`) outside `1..=`[`super::likelihood::MAX_THREADS`].
+    pub fn set_threads(&mut self, threads: usize) -> Result<(), MapAidedError> {
+        self.workers.set_threads("threads", threads)
     }
 
     /// The settings.
@@ -145,7 +163,7 @@ impl Mgpmf {
             &part,
             spacing.component_mul(&spacing) / 6.0,
         );
-        let stats = lik.evaluate(&self.points, &mut self.log_w, &mut self.rays, caster);
+        let stats = lik.evaluate(&self.points, &mut self.log_w, &mut self.workers, caster);
         if !beams.is_empty() && stats.hits == 0 {
             return Err(MapAidedError::PoseOutsideMap {
                 rays: stats.rays,
@@ -395,10 +413,47 @@ mod tests {
         );
         assert_eq!(f, before);
 
+        let f_prior = f.clone();
         let rep = m.update(&mut f, &est, &beams, Some(&baro), &map).unwrap();
+        let (grid, weights) = (m.last_grid().0.to_vec(), m.last_grid().1.to_vec());
         let fixed = f.take_correction().apply(&est);
         let err = (fixed.pos_in_nav - truth.pos_in_nav).norm();
         assert!(err < 0.5, "error {err} m, report {rep:?}");
         assert!(rep.effective_points >= 1.0 && rep.hit_fraction > 0.1);
+
+        // the same update on 2, 3 and 8 threads (15,129 points: 60 chunks) is
+        // bit-identical; a different prior is not (the comparison can fail)
+        for threads in [2, 3, 8] {
+            let mut m_t = Mgpmf::new(MgpmfParams::default().check().unwrap());
+            m_t.set_threads(threads).unwrap();
+            assert_eq!(m_t.threads(), threads);
+            let mut f_t = f_prior.clone();
+            let rep_t = m_t
+                .update(&mut f_t, &est, &beams, Some(&baro), &map)
+                .unwrap();
+            assert_eq!(rep_t, rep, "{threads} threads");
+            assert_eq!(m_t.last_grid().1, &weights[..], "{threads} threads");
+            assert_eq!(m_t.last_grid().0, &grid[..], "{threads} threads");
+            assert_eq!(
+                f_t.take_correction().apply(&est),
+                fixed,
+                "{threads} threads"
+            );
+        }
+        let mut m_2 = Mgpmf::new(MgpmfParams::default().check().unwrap());
+        m_2.set_threads(2).unwrap();
+        let mut f_other = filter(2.9, 0.05, 7.0);
+        let rep_other = m_2
+            .update(&mut f_other, &est, &beams, Some(&baro), &map)
+            .unwrap();
+        assert_ne!(rep_other, rep);
+        for bad_threads in [0, 257] {
+            let e = m_2.set_threads(bad_threads).unwrap_err();
+            assert!(
+                matches!(&e, MapAidedError::InvalidParameter { field, .. } if field == "threads"),
+                "{e}"
+            );
+        }
+        assert_eq!(m_2.threads(), 2);
     }
 }

@@ -38,7 +38,7 @@ use rand_distr::{Distribution, StandardNormal};
 
 use super::error::MapAidedError;
 use super::ins12::{Ins12Filter, NominalNav};
-use super::likelihood::{RayBuffers, model};
+use super::likelihood::{LikelihoodWorkers, model};
 use super::marginal::{
     LinearStep, LinearStepReport, Partition, normalize_log_weights, weighted_moments,
 };
@@ -74,7 +74,7 @@ pub struct ParticleFilter {
     weights: Vec<f64>,
     next: Vec<Vector3<f64>>,
     dirs: Vec<Vector3<f64>>,
-    rays: RayBuffers,
+    workers: LikelihoodWorkers,
     linear: LinearStep,
 }
 
@@ -91,9 +91,27 @@ impl ParticleFilter {
             weights: Vec::with_capacity(n),
             next: Vec::with_capacity(n),
             dirs: Vec::new(),
-            rays: RayBuffers::default(),
+            workers: LikelihoodWorkers::default(),
             linear: LinearStep::default(),
         }
+    }
+
+    /// The number of threads the likelihood of the particles is evaluated on (1, the
+    /// default, is the calling thread only).
+    pub fn threads(&self) -> usize {
+        self.workers.threads()
+    }
+
+    /// Evaluates the likelihood of the particles on `threads` scoped threads
+    /// (contiguous ranges of them, [`super::likelihood`]): the result is bit-identical
+    /// for every thread count, only faster where cores are free. The Monte Carlo
+    /// runner already runs one run per core, so this is for single runs (a replay, the
+    /// navigation process of PILS).
+    ///
+    /// # Errors
+    /// [`MapAidedError::InvalidParameter`] (`threads`) outside `1..=`[`super::likelihood::MAX_THREADS`].
+    pub fn set_threads(&mut self, threads: usize) -> Result<(), MapAidedError> {
+        self.workers.set_threads("threads", threads)
     }
 
     /// The settings.
@@ -164,7 +182,7 @@ impl ParticleFilter {
             &part,
             Vector3::zeros(),
         );
-        let stats = lik.evaluate(&self.points, &mut self.log_w, &mut self.rays, caster);
+        let stats = lik.evaluate(&self.points, &mut self.log_w, &mut self.workers, caster);
         if !beams.is_empty() && stats.hits == 0 {
             return Err(MapAidedError::PoseOutsideMap {
                 rays: stats.rays,
@@ -279,13 +297,14 @@ mod tests {
             .unwrap()
         };
         let settings = with_kernel(ParticleKernel::Roughening);
-        let run_with = |seed: u64, settings: ParticleSettings| {
+        let run_on = |seed: u64, settings: ParticleSettings, threads: usize| {
             let mut p0 = Ins12Filter::diagonal_covariance([3.0, 0.1, 0.01, 0.01]);
             p0[(ATT + 2, ATT + 2)] = 0.05f64.powi(2);
             let mut f =
                 Ins12Filter::new(&p0, 1.0, Ins12Params::default().check().unwrap()).unwrap();
             let mut est = nominal(Vector3::new(-6.0, -2.8, -3.0), 0.42);
             let mut pf = ParticleFilter::new(settings);
+            pf.set_threads(threads).unwrap();
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             for _ in 0..4 {
                 pf.update(&mut f, &est, &z, None, &map, &mut rng).unwrap();
@@ -293,7 +312,9 @@ mod tests {
             }
             (est, pf)
         };
+        let run_with = |seed: u64, settings: ParticleSettings| run_on(seed, settings, 1);
         let run = |seed: u64| run_with(seed, settings);
+        let run_threads = |seed: u64, threads: usize| run_on(seed, settings, threads);
         // the regularized kernel converges as well, and differs from roughening
         let (est_reg, _) = run_with(5, with_kernel(ParticleKernel::Regularized));
         let err_reg = (est_reg.pos_in_nav - truth.pos_in_nav).norm();
@@ -305,6 +326,13 @@ mod tests {
         assert_eq!(pf.deviations().len(), 2000);
         let (est2, _) = run(5);
         assert_eq!(est, est2);
+        // threads change nothing (2000 particles: 8 chunks), and the seed does
+        for threads in [2, 3, 8] {
+            let (est_t, pf_t) = run_threads(5, threads);
+            assert_eq!(est_t, est, "{threads} threads");
+            assert_eq!(pf_t.deviations(), pf.deviations(), "{threads} threads");
+        }
+        assert_ne!(run_threads(6, 2).0, est);
 
         let mut pf = pf;
         let p0 = Ins12Filter::diagonal_covariance([3.0, 0.1, 0.01, 0.01]);
