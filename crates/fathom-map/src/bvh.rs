@@ -344,10 +344,15 @@ fn flat_tree(boxes: &[(Vector3<f64>, Vector3<f64>)]) -> Vec<BinNode> {
     nodes
 }
 
-/// The traversal stack: 64 entries in place, spilling to the heap beyond (only for
-/// very deep trees). An entry packs a node index and its entry range as `f32` bits.
+/// Entries of the traversal stack held in place.
+const INLINE: usize = 32;
+
+/// The traversal stack: [`INLINE`] entries in place (few enough that zeroing them
+/// for each ray is a handful of vector stores, not a `memset` call), spilling to the
+/// heap beyond (deep trees only). An entry packs a node index and its entry range as
+/// `f32` bits.
 struct Stack {
-    items: [u64; 64],
+    items: [u64; INLINE],
     len: usize,
     spill: Vec<u64>,
 }
@@ -356,7 +361,7 @@ impl Stack {
     #[inline(always)]
     fn new() -> Self {
         Self {
-            items: [0; 64],
+            items: [0; INLINE],
             len: 0,
             spill: Vec::new(),
         }
