@@ -38,26 +38,28 @@ pub enum BvhBuild {
 /// ray, fewer node loads).
 const WIDTH: usize = 8;
 
-/// Child slot flag: the low 31 bits are a triangle slot (leaf order), not a node.
-const LEAF: u32 = 1 << 31;
-/// An unused child slot.
-const EMPTY: u32 = u32::MAX;
-
-/// A node of the wide tree: child boxes as `[axis][lane]` and the child slots
-/// (224 bytes of data, padded to 256: whole cache lines).
+/// A node of the wide tree: child boxes as `[axis][lane]`, the child slots (a node
+/// index or a triangle slot in leaf order) and which lanes hold a leaf and which an
+/// inner node (neither: unused; 226 bytes of data, padded to 256: whole cache lines).
 #[derive(Debug, Clone, Copy)]
 #[repr(align(64))]
 struct WideNode {
     lo: [[f32; WIDTH]; 3],
     hi: [[f32; WIDTH]; 3],
     child: [u32; WIDTH],
+    /// Lane `i` (bit `i`) is a triangle.
+    leaf: u8,
+    /// Lane `i` (bit `i`) is an inner node.
+    inner: u8,
 }
 
 impl WideNode {
     const EMPTY: WideNode = WideNode {
         lo: [[0.0; WIDTH]; 3],
         hi: [[0.0; WIDTH]; 3],
-        child: [EMPTY; WIDTH],
+        child: [0; WIDTH],
+        leaf: 0,
+        inner: 0,
     };
 }
 
@@ -160,11 +162,13 @@ impl BvhCaster {
                         let [a, b, c] = mesh.corners(t as usize);
                         self.leaf_triangles
                             .push((PreparedTriangle::new(&a, &b, &c), t));
-                        LEAF | (self.leaf_triangles.len() as u32 - 1)
+                        node.leaf |= 1 << lane;
+                        self.leaf_triangles.len() as u32 - 1
                     }
                     None => {
                         self.nodes.push(WideNode::EMPTY);
                         inner.push((k, self.nodes.len() - 1));
+                        node.inner |= 1 << lane;
                         (self.nodes.len() - 1) as u32
                     }
                 };
@@ -535,36 +539,29 @@ impl BvhCaster {
                 continue;
             }
             let node = &self.nodes[n as usize];
-            let (ent, mut mask) = Self::entries(node, &ray, limit);
-            // inner children, kept sorted far to near so the nearest is popped first;
-            // leaves collected first so that their loads overlap
-            let mut inner: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
-            let mut leaves: [u32; WIDTH] = [0; WIDTH];
-            let (mut count, mut n_leaves) = (0, 0);
-            while mask != 0 {
-                let lane = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let c = node.child[lane];
-                if c == EMPTY {
-                    continue;
-                }
-                if c & LEAF != 0 {
-                    leaves[n_leaves] = c & !LEAF;
-                    n_leaves += 1;
-                } else {
-                    // insertion into the far-to-near order
-                    let mut j = count;
-                    while j > 0 && inner[j - 1].0 < ent[lane] {
-                        inner[j] = inner[j - 1];
-                        j -= 1;
-                    }
-                    inner[j] = (ent[lane], c);
-                    count += 1;
-                }
-            }
-            for &slot in &leaves[..n_leaves] {
-                let (tri, index) = &self.leaf_triangles[slot as usize];
+            let (ent, hit) = Self::entries(node, &ray, limit);
+            let mut leaves = hit & u32::from(node.leaf);
+            while leaves != 0 {
+                let lane = leaves.trailing_zeros() as usize;
+                leaves &= leaves - 1;
+                let (tri, index) = &self.leaf_triangles[node.child[lane] as usize];
                 best.offer(tri, *index, &o, &d);
+            }
+            // inner children, kept sorted far to near so the nearest is popped first
+            let mut inner: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
+            let mut count = 0;
+            let mut lanes = hit & u32::from(node.inner);
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros() as usize;
+                lanes &= lanes - 1;
+                // insertion into the far-to-near order
+                let mut j = count;
+                while j > 0 && inner[j - 1].0 < ent[lane] {
+                    inner[j] = inner[j - 1];
+                    j -= 1;
+                }
+                inner[j] = (ent[lane], node.child[lane]);
+                count += 1;
             }
             limit = round_up(best.t);
             for &(e, c) in &inner[..count] {
