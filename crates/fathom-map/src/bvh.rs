@@ -634,8 +634,10 @@ impl BvhCaster {
         // `best.t` as an f32 not below it (the node pruning bound)
         let mut limit = round_up(best.t);
         stack.clear();
-        stack.push(0, f32::NEG_INFINITY);
-        while let Some((n, entry)) = stack.pop() {
+        // the node to visit next without going through the stack (the nearest child
+        // of the last node), else the top of the stack
+        let mut next = Some((0u32, f32::NEG_INFINITY));
+        while let Some((n, entry)) = next.take().or_else(|| stack.pop()) {
             if entry > limit {
                 continue;
             }
@@ -644,14 +646,18 @@ impl BvhCaster {
             let (ent, hit) = Self::entries(node, &ray, limit);
             let leaf = u32::from(links.leaf);
             let mut leaves = hit & leaf;
-            while leaves != 0 {
-                let lane = leaves.trailing_zeros();
-                leaves &= leaves - 1;
-                let slot = links.first_triangle + (leaf & ((1 << lane) - 1)).count_ones();
-                let (tri, index) = &self.leaf_triangles[slot as usize];
-                best.offer(tri, *index, &o, &d);
+            if leaves != 0 {
+                while leaves != 0 {
+                    let lane = leaves.trailing_zeros();
+                    leaves &= leaves - 1;
+                    let slot = links.first_triangle + (leaf & ((1 << lane) - 1)).count_ones();
+                    let (tri, index) = &self.leaf_triangles[slot as usize];
+                    best.offer(tri, *index, &o, &d);
+                }
+                limit = round_up(best.t);
             }
-            // inner children, kept sorted far to near so the nearest is popped first
+            // inner children, kept sorted far to near: the nearest is visited next,
+            // the others pushed so that the nearer are popped first
             let inner_lanes = u32::from(node.used) & !leaf;
             let mut inner: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
             let mut count = 0;
@@ -670,14 +676,16 @@ impl BvhCaster {
                 inner[j] = (e, child);
                 count += 1;
             }
-            limit = round_up(best.t);
-            for &(e, c) in &inner[..count] {
-                if e <= limit {
-                    stack.push(c, e);
-                    // touch the node now: its load overlaps with the work before it
-                    // is popped (a software prefetch without `unsafe`)
-                    std::hint::black_box(self.nodes[c as usize].used);
+            if let Some((&(e, c), farther)) = inner[..count].split_last() {
+                for &(e, c) in farther {
+                    if e <= limit {
+                        stack.push(c, e);
+                        // touch the node now: its load overlaps with the work before
+                        // it is popped (a software prefetch without `unsafe`)
+                        std::hint::black_box(self.nodes[c as usize].used);
+                    }
                 }
+                next = Some((c, e));
             }
         }
         self.mesh.hit_record(&best, &d)
