@@ -49,8 +49,8 @@ const WIDTH: usize = 8;
 struct WideNode {
     /// Grid origin per axis, relative to the tree's center.
     origin: [f32; 3],
-    /// Grid step per axis: `2^exp` ([`step`]).
-    exp: [i8; 3],
+    /// Grid step per axis as its `f32` exponent field (`2^(exp - 127)`, [`step`]).
+    exp: [u8; 3],
     /// Lane `i` (bit `i`) holds a child.
     used: u8,
     /// Lower planes of the child boxes as `[axis][lane]`, in grid steps ([`decode`]).
@@ -83,10 +83,10 @@ struct Links {
     leaf: u8,
 }
 
-/// The grid step `2^exp` (`exp` in `-126..=127`: a normal `f32`).
+/// The grid step `2^(exp - 127)` (`exp` in `1..=254`: a normal `f32`).
 #[inline(always)]
-fn step(exp: i8) -> f32 {
-    f32::from_bits(((i32::from(exp) + 127) as u32) << 23)
+fn step(exp: u8) -> f32 {
+    f32::from_bits(u32::from(exp) << 23)
 }
 
 /// The plane `q` steps from `origin`: `q * step` is exact (8 by 24 bits, a power of
@@ -100,7 +100,7 @@ fn decode(origin: f32, step: f32, q: u8) -> f32 {
 /// The grid of one axis for the child intervals `kids` (`lo <= hi`, relative to the
 /// center): the origin, the step's exponent, and each interval's planes in steps with
 /// `decode(lo) <= lo` and `decode(hi) >= hi`.
-fn quantize_axis(kids: &[(f64, f64)]) -> (f32, i8, Vec<(u8, u8)>) {
+fn quantize_axis(kids: &[(f64, f64)]) -> (f32, u8, Vec<(u8, u8)>) {
     let lo_n = kids.iter().map(|k| k.0).fold(f64::INFINITY, f64::min);
     let hi_n = kids.iter().map(|k| k.1).fold(f64::NEG_INFINITY, f64::max);
     let origin = round_down(lo_n);
@@ -109,7 +109,7 @@ fn quantize_axis(kids: &[(f64, f64)]) -> (f32, i8, Vec<(u8, u8)>) {
     // rounding of the sum asks for it
     let mut exp = ((extent / 255.0).log2().ceil() as i32).clamp(-126, 127);
     loop {
-        let s = step(exp as i8);
+        let s = step((exp + 127) as u8);
         let mut planes = Vec::with_capacity(kids.len());
         let mut fits = true;
         for &(lo, hi) in kids {
@@ -131,7 +131,7 @@ fn quantize_axis(kids: &[(f64, f64)]) -> (f32, i8, Vec<(u8, u8)>) {
             planes.push((ql, qh));
         }
         if fits || exp == 127 {
-            return (origin, exp as i8, planes);
+            return (origin, (exp + 127) as u8, planes);
         }
         exp += 1;
     }
@@ -608,8 +608,9 @@ impl BvhCaster {
             let n = n - F32_SLACK * n.abs();
             let f = f + F32_SLACK * f.abs();
             near[lane] = n;
-            // `&`, not `&&`: no branch per lane
-            hit[lane] = u8::from((n <= f) & (f >= 0.0) & (n <= limit));
+            // `n <= f && f >= 0 && n <= limit` without a branch (a negative limit
+            // culls all, as no hit can count then)
+            hit[lane] = u8::from(max(n, 0.0) <= min(f, limit));
         }
         (near, gather(hit) & u32::from(node.used))
     }
