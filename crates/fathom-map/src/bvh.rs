@@ -928,6 +928,121 @@ mod tests {
         }
     }
 
+    /// The `f32` node test never culls a box that the exact ray enters within its
+    /// limit (nor one it misses by less than 1e-9 relative), and its entry is never
+    /// beyond the exact entry: rays at corners, along edges, in face planes
+    /// (grazing), parallel to axes, from near and far.
+    #[test]
+    fn the_node_test_never_culls_a_box_the_ray_enters() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(35);
+        let mut checked = 0;
+        for round in 0..300 {
+            let scale = [1e-3, 1.0, 50.0, 3e3][round % 4];
+            let offset = [0.0, 0.0, 1e4, -2e5][(round / 4) % 4];
+            // eight boxes (some flat) in one node
+            let boxes: Vec<([f64; 3], [f64; 3])> = (0..WIDTH)
+                .map(|_| {
+                    let lo: [f64; 3] =
+                        std::array::from_fn(|_| offset + scale * rng.random::<f64>());
+                    let hi = lo.map(|l| {
+                        if rng.random::<f64>() < 0.2 {
+                            l
+                        } else {
+                            l + scale * rng.random::<f64>()
+                        }
+                    });
+                    (lo, hi)
+                })
+                .collect();
+            let mut node = WideNode::EMPTY;
+            node.used = u8::MAX;
+            for axis in 0..3 {
+                let intervals: Vec<_> = boxes.iter().map(|b| (b.0[axis], b.1[axis])).collect();
+                let (origin, exp, planes) = quantize_axis(&intervals);
+                node.origin[axis] = origin;
+                node.exp[axis] = exp;
+                for (lane, (ql, qh)) in planes.into_iter().enumerate() {
+                    node.lo[axis][lane] = ql;
+                    node.hi[axis][lane] = qh;
+                }
+            }
+            for lane in 0..WIDTH {
+                // the exact box of the lane (its planes)
+                let p = |side: usize, k: usize| {
+                    let q = [node.lo, node.hi][side][k][lane];
+                    f64::from(decode(node.origin[k], step(node.exp[k]), q))
+                };
+                let (lo, hi) = (
+                    Vector3::from_fn(|k, _| p(0, k)),
+                    Vector3::from_fn(|k, _| p(1, k)),
+                );
+                for _ in 0..12 {
+                    let pick = |rng: &mut rand_chacha::ChaCha8Rng| {
+                        Vector3::from_fn(|k, _| match rng.random_range(0..3) {
+                            0 => lo[k],
+                            1 => hi[k],
+                            _ => lo[k] + (hi[k] - lo[k]) * rng.random::<f64>(),
+                        })
+                    };
+                    let target = pick(&mut rng);
+                    let far = [1.0, 10.0, 1e3][rng.random_range(0..3)] * scale;
+                    let mut o = target + Vector3::from_fn(|_, _| far * (rng.random::<f64>() - 0.5));
+                    let mut d = target - o;
+                    // grazing: in the plane of a face, or along an axis
+                    match rng.random_range(0..4) {
+                        0 => {
+                            let k = rng.random_range(0..3);
+                            o[k] = target[k];
+                            d[k] = 0.0;
+                        }
+                        1 => {
+                            let k = rng.random_range(0..3);
+                            d = Vector3::zeros();
+                            d[k] = if o[k] < target[k] { 1.0 } else { -1.0 };
+                            for j in 0..3 {
+                                if j != k {
+                                    o[j] = target[j];
+                                }
+                            }
+                        }
+                        _ => {}
+                    }
+                    let Some(d) = d.try_normalize(0.0) else {
+                        continue;
+                    };
+                    let (oa, da) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
+                    let ray = RayF32::new(&oa, &da, &Vector3::zeros());
+                    // the exact interval, in f64
+                    let (mut enter, mut exit) = (f64::NEG_INFINITY, f64::INFINITY);
+                    for k in 0..3 {
+                        if d[k] == 0.0 {
+                            if o[k] < lo[k] || o[k] > hi[k] {
+                                enter = f64::INFINITY;
+                            }
+                        } else {
+                            let (a, b) = ((lo[k] - o[k]) / d[k], (hi[k] - o[k]) / d[k]);
+                            enter = enter.max(a.min(b));
+                            exit = exit.min(a.max(b));
+                        }
+                    }
+                    let tol = 1e-9 * (1.0 + exit.abs().min(1e300));
+                    let limit = round_up(enter.max(0.0) * (1.0 + 1e-9) + 1e-9);
+                    let (near, mask) = BvhCaster::entries(&node, &ray, limit);
+                    if enter <= exit + tol && exit >= -tol {
+                        assert!(
+                            mask & (1 << lane) != 0,
+                            "culled: {o:?} {d:?} [{enter}, {exit}] box {lo:?} {hi:?}"
+                        );
+                        assert!(f64::from(near[lane]) <= enter + tol);
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 10_000, "{checked}");
+    }
+
     #[test]
     fn gather_sets_the_bit_of_each_flag() {
         for mask in 0..256u32 {
