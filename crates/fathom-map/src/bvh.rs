@@ -542,23 +542,30 @@ fn max(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
-/// Relative widening of the `f32` range intervals: the slab products are rounded
-/// three or four times at `2^-24` (about 2.4e-7 relative); 1e-6 covers it.
+/// Relative widening of the `f32` range intervals: the subtraction, the product and
+/// the reciprocal are rounded once each at `2^-24` (1.8e-7 relative together); 1e-6
+/// covers it.
 const F32_SLACK: f32 = 1e-6;
 
 /// A ray prepared for the `f32` box tests, relative to the tree's center.
 ///
-/// Conservative: the origin's rounding to `f32` (at most `2^-24 |o|`, taken as
-/// `e = 2^-23 max|o_k| + 1e-6` m) is added to every axis interval as `e |1/d_k|`; a
-/// zero direction component gets the reciprocal `+-1e30` instead of infinity, so the
-/// slab products are never `0 * inf` (no NaN), and its slack `e 1e30` leaves that axis
-/// unrestricted for an origin inside the slab; relative rounding is covered by
-/// [`F32_SLACK`]. Overflow gives infinities, which compare correctly.
+/// Conservative: the range of a lower plane `l` on axis `k` is computed from an origin
+/// moved up by `e`, `(l - lo_k) i_k`, that of an upper plane `h` from an origin moved
+/// down by `e`, `(h - hi_k) i_k`, with `lo_k >= o_k + e` and `hi_k <= o_k - e` rounded
+/// outwards from the exact `f64` origin, and `e = 2^-23 max|o_k| + 1e-6` m. Whatever
+/// the sign of `i_k`, that widens the exact slab interval by `e |i_k|` on both ends;
+/// the relative rounding of the subtraction, of the product and of `i_k` (`2^-24`
+/// each) is covered by [`F32_SLACK`]. A zero direction component gets the reciprocal
+/// `+-1e30` instead of infinity, so the products are never `0 * inf` (no NaN), and the
+/// widening `e 1e30` leaves that axis unrestricted for an origin inside the slab.
+/// Overflow gives infinities, which compare correctly.
 #[derive(Debug, Clone, Copy)]
 struct RayF32 {
-    o: [f32; 3],
+    /// The origin for the lower planes: at least `e` above the exact one.
+    lo: [f32; 3],
+    /// The origin for the upper planes: at least `e` below the exact one.
+    hi: [f32; 3],
     inv: [f32; 3],
-    slack: [f32; 3],
 }
 
 impl RayF32 {
@@ -573,11 +580,11 @@ impl RayF32 {
                 1e30f64.copysign(x)
             }
         };
-        let i = [inv(d[0]), inv(d[1]), inv(d[2])];
         Self {
-            o: rel.map(|x| x as f32),
-            inv: i.map(|x| x as f32),
-            slack: i.map(|x| round_up(e * x.abs() * (1.0 + 1e-6))),
+            // the f64 sums round at 2^-53 relative, far inside `e`
+            lo: rel.map(|x| round_up(x + e)),
+            hi: rel.map(|x| round_down(x - e)),
+            inv: [inv(d[0]), inv(d[1]), inv(d[2])].map(|x| x as f32),
         }
     }
 }
@@ -587,9 +594,9 @@ impl BvhCaster {
     /// the mask of the boxes hit with an entry not beyond `limit`.
     #[inline(always)]
     fn entries(node: &WideNode, ray: &RayF32, limit: f32) -> ([f32; WIDTH], u32) {
-        let [o0, o1, o2] = ray.o;
+        let [l0, l1, l2] = ray.lo;
+        let [h0, h1, h2] = ray.hi;
         let [i0, i1, i2] = ray.inv;
-        let [s0, s1, s2] = ray.slack;
         let [g0, g1, g2] = node.origin;
         let [t0, t1, t2] = node.exp.map(step);
         let mut near = [0.0f32; WIDTH];
@@ -597,14 +604,14 @@ impl BvhCaster {
         // one lane per iteration, all three axes inside: a loop the compiler
         // vectorizes across lanes
         for lane in 0..WIDTH {
-            let ax = (decode(g0, t0, node.lo[0][lane]) - o0) * i0;
-            let bx = (decode(g0, t0, node.hi[0][lane]) - o0) * i0;
-            let ay = (decode(g1, t1, node.lo[1][lane]) - o1) * i1;
-            let by = (decode(g1, t1, node.hi[1][lane]) - o1) * i1;
-            let az = (decode(g2, t2, node.lo[2][lane]) - o2) * i2;
-            let bz = (decode(g2, t2, node.hi[2][lane]) - o2) * i2;
-            let n = max(max(min(ax, bx) - s0, min(ay, by) - s1), min(az, bz) - s2);
-            let f = min(min(max(ax, bx) + s0, max(ay, by) + s1), max(az, bz) + s2);
+            let ax = (decode(g0, t0, node.lo[0][lane]) - l0) * i0;
+            let bx = (decode(g0, t0, node.hi[0][lane]) - h0) * i0;
+            let ay = (decode(g1, t1, node.lo[1][lane]) - l1) * i1;
+            let by = (decode(g1, t1, node.hi[1][lane]) - h1) * i1;
+            let az = (decode(g2, t2, node.lo[2][lane]) - l2) * i2;
+            let bz = (decode(g2, t2, node.hi[2][lane]) - h2) * i2;
+            let n = max(max(min(ax, bx), min(ay, by)), min(az, bz));
+            let f = min(min(max(ax, bx), max(ay, by)), max(az, bz));
             let n = n - F32_SLACK * n.abs();
             let f = f + F32_SLACK * f.abs();
             near[lane] = n;
