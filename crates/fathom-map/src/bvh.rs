@@ -36,8 +36,8 @@ pub enum BvhBuild {
     Ploc,
 }
 
-/// Children per node (8 measured faster than 4: 2,535 vs 2,890 instructions per
-/// ray, fewer node loads).
+/// Children per node (8 measured faster than 4: docs/performance.md, "Ray
+/// casting").
 const WIDTH: usize = 8;
 
 /// A node of the wide tree in one cache line: the boxes of up to eight children,
