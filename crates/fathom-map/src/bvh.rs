@@ -3,9 +3,11 @@
 //! The hierarchy is built by `parry3d-f64` (its `Bvh`, one triangle per leaf, binned
 //! SAH or PLOC). For casting, that binary tree is read once (through parry's public
 //! `traverse`, whose visiting order the reader mirrors to recover the topology) and
-//! collapsed into a flat 8-wide tree: each node holds the boxes of up to eight
-//! children as `f32` (widened as `triangle::widen_box` says, then rounded outwards),
-//! and the triangles are stored in leaf order with their mesh index. The choice was
+//! collapsed into a flat 8-wide tree: each node is one cache line holding the boxes
+//! of up to eight children (widened as `triangle::widen_box` says), each plane
+//! quantized to 8 bits on the node's own grid and rounded outwards; a node's inner
+//! children are consecutive nodes and its triangles consecutive slots in leaf order
+//! (with their mesh index), found from a small side record ([`Links`]). The choice was
 //! measured on a 120k-triangle city against parry's own closure-based `find_best`
 //! traversal on its 2-wide `f64` nodes and against the `bvh` crate
 //! (docs/performance.md, "Ray casting").
@@ -34,37 +36,113 @@ pub enum BvhBuild {
     Ploc,
 }
 
-/// Children per node (8 measured faster than 4: 2,535 vs 2,890 instructions per
-/// ray, fewer node loads).
+/// Children per node (8 measured faster than 4: docs/performance.md, "Ray
+/// casting").
 const WIDTH: usize = 8;
 
-/// Child slot flag: the low 31 bits are a triangle slot (leaf order), not a node.
-const LEAF: u32 = 1 << 31;
-/// An unused child slot.
-const EMPTY: u32 = u32::MAX;
-
-/// A node of the wide tree: child boxes as `[axis][lane]` and the child slots
-/// (224 bytes of data, padded to 256: whole cache lines).
+/// A node of the wide tree in one cache line: the boxes of up to eight children,
+/// each plane quantized to 8 bits on a grid of the node's own (an origin and a
+/// power-of-two step per axis) and rounded outwards (as in Ylitie et al. 2017).
+/// Where the children are is in the node's [`Links`].
 #[derive(Debug, Clone, Copy)]
-#[repr(align(64))]
+#[repr(C, align(64))]
 struct WideNode {
-    lo: [[f32; WIDTH]; 3],
-    hi: [[f32; WIDTH]; 3],
-    child: [u32; WIDTH],
+    /// Grid origin per axis, relative to the tree's center.
+    origin: [f32; 3],
+    /// Grid step per axis as its `f32` exponent field (`2^(exp - 127)`, [`step`]).
+    exp: [u8; 3],
+    /// Lane `i` (bit `i`) holds a child.
+    used: u8,
+    /// Lower planes of the child boxes as `[axis][lane]`, in grid steps ([`decode`]).
+    lo: [[u8; WIDTH]; 3],
+    /// Upper planes of the child boxes as `[axis][lane]`, in grid steps.
+    hi: [[u8; WIDTH]; 3],
 }
+
+const _: () = assert!(std::mem::size_of::<WideNode>() == 64);
 
 impl WideNode {
     const EMPTY: WideNode = WideNode {
-        lo: [[0.0; WIDTH]; 3],
-        hi: [[0.0; WIDTH]; 3],
-        child: [EMPTY; WIDTH],
+        origin: [0.0; 3],
+        exp: [0; 3],
+        used: 0,
+        lo: [[0; WIDTH]; 3],
+        hi: [[0; WIDTH]; 3],
     };
+}
+
+/// Where the children of a node are: its inner children are the consecutive nodes
+/// from `first_node` in lane order, its triangles the consecutive slots (leaf order)
+/// from `first_triangle`; lane `i` is the `k`-th of its kind, `k` the number of
+/// lanes of that kind below `i`.
+#[derive(Debug, Clone, Copy, Default)]
+struct Links {
+    first_node: u32,
+    first_triangle: u32,
+    /// Lane `i` (bit `i`) is a triangle; the other used lanes are inner nodes.
+    leaf: u8,
+}
+
+/// The grid step `2^(exp - 127)` (`exp` in `1..=254`: a normal `f32`).
+#[inline(always)]
+fn step(exp: u8) -> f32 {
+    f32::from_bits(u32::from(exp) << 23)
+}
+
+/// The plane `q` steps from `origin`: `q * step` is exact (8 by 24 bits, a power of
+/// two), the sum is rounded once; the build checks these very values against the
+/// exact boxes, and the traversal computes them with the same operations.
+#[inline(always)]
+fn decode(origin: f32, step: f32, q: u8) -> f32 {
+    origin + f32::from(q) * step
+}
+
+/// The grid of one axis for the child intervals `kids` (`lo <= hi`, relative to the
+/// center): the origin, the step's exponent, and each interval's planes in steps with
+/// `decode(lo) <= lo` and `decode(hi) >= hi`.
+fn quantize_axis(kids: &[(f64, f64)]) -> (f32, u8, Vec<(u8, u8)>) {
+    let lo_n = kids.iter().map(|k| k.0).fold(f64::INFINITY, f64::min);
+    let hi_n = kids.iter().map(|k| k.1).fold(f64::NEG_INFINITY, f64::max);
+    let origin = round_down(lo_n);
+    let extent = hi_n - f64::from(origin);
+    // the smallest step with 255 steps covering the extent, or one more when the
+    // rounding of the sum asks for it
+    let mut exp = ((extent / 255.0).log2().ceil() as i32).clamp(-126, 127);
+    loop {
+        let s = step((exp + 127) as u8);
+        let mut planes = Vec::with_capacity(kids.len());
+        let mut fits = true;
+        for &(lo, hi) in kids {
+            let mut ql = ((lo - f64::from(origin)) / f64::from(s))
+                .floor()
+                .clamp(0.0, 255.0) as u8;
+            while ql > 0 && f64::from(decode(origin, s, ql)) > lo {
+                ql -= 1;
+            }
+            let mut qh = ((hi - f64::from(origin)) / f64::from(s))
+                .ceil()
+                .clamp(0.0, 255.0) as u8;
+            while qh < 255 && f64::from(decode(origin, s, qh)) < hi {
+                qh += 1;
+            }
+            // `decode(0) = origin <= lo` always; the top of the grid at the largest
+            // step is infinite
+            fits &= f64::from(decode(origin, s, qh)) >= hi;
+            planes.push((ql, qh));
+        }
+        if fits || exp == 127 {
+            return (origin, (exp + 127) as u8, planes);
+        }
+        exp += 1;
+    }
 }
 
 /// Casts rays on an 8-wide BVH over the triangles of a [`TriMesh`].
 #[derive(Debug, Clone)]
 pub struct BvhCaster {
     nodes: Vec<WideNode>,
+    /// Where each node's children are (by node index).
+    links: Vec<Links>,
     /// The boxes are stored relative to this point (the mesh's bounds' center).
     center: Vector3<f64>,
     /// Triangles in leaf order, with their mesh index (one fetch per leaf).
@@ -105,6 +183,7 @@ impl BvhCaster {
             .map_or(Vector3::zeros(), |(lo, hi)| (lo + hi) / 2.0);
         let mut caster = Self {
             nodes: Vec::new(),
+            links: Vec::new(),
             center,
             leaf_triangles: Vec::with_capacity(mesh.len()),
             mesh: prepared,
@@ -128,6 +207,7 @@ impl BvhCaster {
     /// Collapses the binary tree (root at index 0) into wide nodes, depth first.
     fn collapse(&mut self, bin: &[BinNode], mesh: &TriMesh) {
         self.nodes.push(WideNode::EMPTY);
+        self.links.push(Links::default());
         let mut work = vec![(0usize, 0usize)];
         while let Some((b, n)) = work.pop() {
             // the children of `b`, opening the largest inner child until there are
@@ -145,30 +225,49 @@ impl BvhCaster {
                 let Some((slot, &k)) = open else { break };
                 kids.splice(slot..=slot, bin[k].children);
             }
-            let mut node = WideNode::EMPTY;
-            let mut inner = Vec::new();
-            for (lane, &k) in kids.iter().enumerate() {
-                let (lo, hi) = widen_box(&bin[k].lo, &bin[k].hi);
-                for axis in 0..3 {
+            let boxes: Vec<_> = kids
+                .iter()
+                .map(|&k| {
+                    let (lo, hi) = widen_box(&bin[k].lo, &bin[k].hi);
                     // relative to the center; the f64 rounding of the difference
                     // (1e-16 relative) is far inside the widening (1e-9)
-                    node.lo[axis][lane] = round_down(lo[axis] - self.center[axis]);
-                    node.hi[axis][lane] = round_up(hi[axis] - self.center[axis]);
+                    (lo - self.center, hi - self.center)
+                })
+                .collect();
+            let mut node = WideNode::EMPTY;
+            for axis in 0..3 {
+                let intervals: Vec<_> = boxes.iter().map(|b| (b.0[axis], b.1[axis])).collect();
+                let (origin, exp, planes) = quantize_axis(&intervals);
+                node.origin[axis] = origin;
+                node.exp[axis] = exp;
+                for (lane, (ql, qh)) in planes.into_iter().enumerate() {
+                    node.lo[axis][lane] = ql;
+                    node.hi[axis][lane] = qh;
                 }
-                node.child[lane] = match bin[k].leaf {
+            }
+            let mut links = Links {
+                first_node: self.nodes.len() as u32,
+                first_triangle: self.leaf_triangles.len() as u32,
+                leaf: 0,
+            };
+            let mut inner = Vec::new();
+            for (lane, &k) in kids.iter().enumerate() {
+                node.used |= 1 << lane;
+                match bin[k].leaf {
                     Some(t) => {
                         let [a, b, c] = mesh.corners(t as usize);
                         self.leaf_triangles
                             .push((PreparedTriangle::new(&a, &b, &c), t));
-                        LEAF | (self.leaf_triangles.len() as u32 - 1)
+                        links.leaf |= 1 << lane;
                     }
                     None => {
                         self.nodes.push(WideNode::EMPTY);
+                        self.links.push(Links::default());
                         inner.push((k, self.nodes.len() - 1));
-                        (self.nodes.len() - 1) as u32
                     }
-                };
+                }
             }
+            self.links[n] = links;
             self.nodes[n] = node;
             // first inner child on top of the stack: depth-first layout
             work.extend(inner.into_iter().rev());
@@ -344,10 +443,15 @@ fn flat_tree(boxes: &[(Vector3<f64>, Vector3<f64>)]) -> Vec<BinNode> {
     nodes
 }
 
-/// The traversal stack: 64 entries in place, spilling to the heap beyond (only for
-/// very deep trees). An entry packs a node index and its entry range as `f32` bits.
+/// Entries of the traversal stack held in place.
+const INLINE: usize = 32;
+
+/// The traversal stack: [`INLINE`] entries in place (few enough that zeroing them
+/// for each ray is a handful of vector stores, not a `memset` call), spilling to the
+/// heap beyond (deep trees only). An entry packs a node index and its entry range as
+/// `f32` bits.
 struct Stack {
-    items: [u64; 64],
+    items: [u64; INLINE],
     len: usize,
     spill: Vec<u64>,
 }
@@ -356,7 +460,7 @@ impl Stack {
     #[inline(always)]
     fn new() -> Self {
         Self {
-            items: [0; 64],
+            items: [0; INLINE],
             len: 0,
             spill: Vec::new(),
         }
@@ -391,6 +495,14 @@ impl Stack {
         };
         Some((item as u32, f32::from_bits((item >> 32) as u32)))
     }
+}
+
+/// Bit `i` set when `flags[i]` is 1 (`flags` all 0 or 1): the eight bytes gathered
+/// into the top byte by one multiplication (byte `i` times byte `7 - i` of the
+/// constant lands on bit `56 + i`; no two partial products share a bit).
+#[inline(always)]
+fn gather(flags: [u8; WIDTH]) -> u32 {
+    (u64::from_le_bytes(flags).wrapping_mul(0x0102_0408_1020_4080) >> 56) as u32
 }
 
 /// The AVX2 token when this CPU has AVX2, found at first use.
@@ -430,23 +542,30 @@ fn max(a: f32, b: f32) -> f32 {
     if a > b { a } else { b }
 }
 
-/// Relative widening of the `f32` range intervals: the slab products are rounded
-/// three or four times at `2^-24` (about 2.4e-7 relative); 1e-6 covers it.
+/// Relative widening of the `f32` range intervals: the subtraction, the product, the
+/// reciprocal and the widening product itself are rounded once each at `2^-24`
+/// (2.4e-7 relative together); 1e-6 covers it.
 const F32_SLACK: f32 = 1e-6;
 
 /// A ray prepared for the `f32` box tests, relative to the tree's center.
 ///
-/// Conservative: the origin's rounding to `f32` (at most `2^-24 |o|`, taken as
-/// `e = 2^-23 max|o_k| + 1e-6` m) is added to every axis interval as `e |1/d_k|`; a
-/// zero direction component gets the reciprocal `+-1e30` instead of infinity, so the
-/// slab products are never `0 * inf` (no NaN), and its slack `e 1e30` leaves that axis
-/// unrestricted for an origin inside the slab; relative rounding is covered by
-/// [`F32_SLACK`]. Overflow gives infinities, which compare correctly.
+/// Conservative: the range of a lower plane `l` on axis `k` is computed from an origin
+/// moved up by `e`, `(l - lo_k) i_k`, that of an upper plane `h` from an origin moved
+/// down by `e`, `(h - hi_k) i_k`, with `lo_k >= o_k + e` and `hi_k <= o_k - e` rounded
+/// outwards from the exact `f64` origin, and `e = 2^-23 max|o_k| + 1e-6` m. Whatever
+/// the sign of `i_k`, that widens the exact slab interval by `e |i_k|` on both ends;
+/// the relative rounding of the subtraction, of the product and of `i_k` (`2^-24`
+/// each) is covered by [`F32_SLACK`]. A zero direction component gets the reciprocal
+/// `+-1e30` instead of infinity, so the products are never `0 * inf` (no NaN), and the
+/// widening `e 1e30` leaves that axis unrestricted for an origin inside the slab.
+/// Overflow gives infinities, which compare correctly.
 #[derive(Debug, Clone, Copy)]
 struct RayF32 {
-    o: [f32; 3],
+    /// The origin for the lower planes: at least `e` above the exact one.
+    lo: [f32; 3],
+    /// The origin for the upper planes: at least `e` below the exact one.
+    hi: [f32; 3],
     inv: [f32; 3],
-    slack: [f32; 3],
 }
 
 impl RayF32 {
@@ -461,47 +580,47 @@ impl RayF32 {
                 1e30f64.copysign(x)
             }
         };
-        let i = [inv(d[0]), inv(d[1]), inv(d[2])];
         Self {
-            o: rel.map(|x| x as f32),
-            inv: i.map(|x| x as f32),
-            slack: i.map(|x| round_up(e * x.abs() * (1.0 + 1e-6))),
+            // the f64 sums round at 2^-53 relative, far inside `e`
+            lo: rel.map(|x| round_up(x + e)),
+            hi: rel.map(|x| round_down(x - e)),
+            inv: [inv(d[0]), inv(d[1]), inv(d[2])].map(|x| x as f32),
         }
     }
 }
 
 impl BvhCaster {
-    /// Entry ranges (conservative lower bounds) of the child boxes of `node`, and
-    /// the mask of the boxes hit with an entry not beyond `limit`.
+    /// Entry ranges (conservative lower bounds, at least 0) of the child boxes of
+    /// `node`, and the mask of the boxes hit with an entry not beyond `limit`.
     #[inline(always)]
     fn entries(node: &WideNode, ray: &RayF32, limit: f32) -> ([f32; WIDTH], u32) {
-        let [o0, o1, o2] = ray.o;
+        let [l0, l1, l2] = ray.lo;
+        let [h0, h1, h2] = ray.hi;
         let [i0, i1, i2] = ray.inv;
-        let [s0, s1, s2] = ray.slack;
+        let [g0, g1, g2] = node.origin;
+        let [t0, t1, t2] = node.exp.map(step);
         let mut near = [0.0f32; WIDTH];
-        let mut hit = [false; WIDTH];
+        let mut hit = [0u8; WIDTH];
         // one lane per iteration, all three axes inside: a loop the compiler
         // vectorizes across lanes
         for lane in 0..WIDTH {
-            let ax = (node.lo[0][lane] - o0) * i0;
-            let bx = (node.hi[0][lane] - o0) * i0;
-            let ay = (node.lo[1][lane] - o1) * i1;
-            let by = (node.hi[1][lane] - o1) * i1;
-            let az = (node.lo[2][lane] - o2) * i2;
-            let bz = (node.hi[2][lane] - o2) * i2;
-            let n = max(max(min(ax, bx) - s0, min(ay, by) - s1), min(az, bz) - s2);
-            let f = min(min(max(ax, bx) + s0, max(ay, by) + s1), max(az, bz) + s2);
-            let n = n - F32_SLACK * n.abs();
-            let f = f + F32_SLACK * f.abs();
+            let ax = (decode(g0, t0, node.lo[0][lane]) - l0) * i0;
+            let bx = (decode(g0, t0, node.hi[0][lane]) - h0) * i0;
+            let ay = (decode(g1, t1, node.lo[1][lane]) - l1) * i1;
+            let by = (decode(g1, t1, node.hi[1][lane]) - h1) * i1;
+            let az = (decode(g2, t2, node.lo[2][lane]) - l2) * i2;
+            let bz = (decode(g2, t2, node.hi[2][lane]) - h2) * i2;
+            let n = max(max(min(ax, bx), min(ay, by)), min(az, bz));
+            let f = min(min(max(ax, bx), max(ay, by)), max(az, bz));
+            // widened by `F32_SLACK`: only the entry's non-negative part and the
+            // exit's non-negative values matter below, so one product each does
+            let n = max(n, 0.0) * (1.0 - F32_SLACK);
             near[lane] = n;
-            // `&`, not `&&`: no branch per lane
-            hit[lane] = (n <= f) & (f >= 0.0) & (n <= limit);
+            // `n <= f && f >= 0 && n <= limit` without a branch (a negative limit
+            // culls all, as no hit can count then)
+            hit[lane] = u8::from(n <= min(f * (1.0 + F32_SLACK), limit));
         }
-        let mut mask = 0;
-        for (lane, &h) in hit.iter().enumerate() {
-            mask |= u32::from(h) << lane;
-        }
-        (near, mask)
+        (near, gather(hit) & u32::from(node.used))
     }
 }
 
@@ -524,51 +643,58 @@ impl BvhCaster {
         // `best.t` as an f32 not below it (the node pruning bound)
         let mut limit = round_up(best.t);
         stack.clear();
-        stack.push(0, f32::NEG_INFINITY);
-        while let Some((n, entry)) = stack.pop() {
+        // the node to visit next without going through the stack (the nearest child
+        // of the last node), else the top of the stack
+        let mut next = Some((0u32, f32::NEG_INFINITY));
+        while let Some((n, entry)) = next.take().or_else(|| stack.pop()) {
             if entry > limit {
                 continue;
             }
             let node = &self.nodes[n as usize];
-            let (ent, mut mask) = Self::entries(node, &ray, limit);
-            // inner children, kept sorted far to near so the nearest is popped first;
-            // leaves collected first so that their loads overlap
+            let links = &self.links[n as usize];
+            let (ent, hit) = Self::entries(node, &ray, limit);
+            let leaf = u32::from(links.leaf);
+            let mut leaves = hit & leaf;
+            if leaves != 0 {
+                while leaves != 0 {
+                    let lane = leaves.trailing_zeros();
+                    leaves &= leaves - 1;
+                    let slot = links.first_triangle + (leaf & ((1 << lane) - 1)).count_ones();
+                    let (tri, index) = &self.leaf_triangles[slot as usize];
+                    best.offer(tri, *index, &o, &d);
+                }
+                limit = round_up(best.t);
+            }
+            // inner children, kept sorted far to near: the nearest is visited next,
+            // the others pushed so that the nearer are popped first
+            let inner_lanes = u32::from(node.used) & !leaf;
             let mut inner: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
-            let mut leaves: [u32; WIDTH] = [0; WIDTH];
-            let (mut count, mut n_leaves) = (0, 0);
-            while mask != 0 {
-                let lane = mask.trailing_zeros() as usize;
-                mask &= mask - 1;
-                let c = node.child[lane];
-                if c == EMPTY {
-                    continue;
+            let mut count = 0;
+            let mut lanes = hit & inner_lanes;
+            while lanes != 0 {
+                let lane = lanes.trailing_zeros();
+                lanes &= lanes - 1;
+                let child = links.first_node + (inner_lanes & ((1 << lane) - 1)).count_ones();
+                let e = ent[lane as usize];
+                // insertion into the far-to-near order
+                let mut j = count;
+                while j > 0 && inner[j - 1].0 < e {
+                    inner[j] = inner[j - 1];
+                    j -= 1;
                 }
-                if c & LEAF != 0 {
-                    leaves[n_leaves] = c & !LEAF;
-                    n_leaves += 1;
-                } else {
-                    // insertion into the far-to-near order
-                    let mut j = count;
-                    while j > 0 && inner[j - 1].0 < ent[lane] {
-                        inner[j] = inner[j - 1];
-                        j -= 1;
+                inner[j] = (e, child);
+                count += 1;
+            }
+            if let Some((&(e, c), farther)) = inner[..count].split_last() {
+                for &(e, c) in farther {
+                    if e <= limit {
+                        stack.push(c, e);
+                        // touch the node now: its load overlaps with the work before
+                        // it is popped (a software prefetch without `unsafe`)
+                        std::hint::black_box(self.nodes[c as usize].used);
                     }
-                    inner[j] = (ent[lane], c);
-                    count += 1;
                 }
-            }
-            for &slot in &leaves[..n_leaves] {
-                let (tri, index) = &self.leaf_triangles[slot as usize];
-                best.offer(tri, *index, &o, &d);
-            }
-            limit = round_up(best.t);
-            for &(e, c) in &inner[..count] {
-                if e <= limit {
-                    stack.push(c, e);
-                    // touch the node now: its load overlaps with the work before it
-                    // is popped (a software prefetch without `unsafe`)
-                    std::hint::black_box(self.nodes[c as usize].child[0]);
-                }
+                next = Some((c, e));
             }
         }
         self.mesh.hit_record(&best, &d)
@@ -687,6 +813,272 @@ mod tests {
             &flat_tree(&[(Vector3::zeros(), Vector3::zeros()); 5]),
             5
         ));
+    }
+
+    /// The union of the widened boxes of the triangles below node `n`, relative to
+    /// the center, after checking that every used lane's quantized box holds the
+    /// union below that lane.
+    fn check_node(caster: &BvhCaster, mesh: &TriMesh, n: usize) -> (Vector3<f64>, Vector3<f64>) {
+        let (node, links) = (&caster.nodes[n], &caster.links[n]);
+        let mut union = (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        );
+        let (mut next_node, mut next_triangle) = (links.first_node, links.first_triangle);
+        for lane in 0..WIDTH {
+            if node.used & (1 << lane) == 0 {
+                continue;
+            }
+            let (lo, hi) = if links.leaf & (1 << lane) != 0 {
+                let index = caster.leaf_triangles[next_triangle as usize].1;
+                next_triangle += 1;
+                let [a, b, c] = mesh.corners(index as usize);
+                let (lo, hi) = widen_box(&a.inf(&b).inf(&c), &a.sup(&b).sup(&c));
+                (lo - caster.center, hi - caster.center)
+            } else {
+                next_node += 1;
+                check_node(caster, mesh, next_node as usize - 1)
+            };
+            for axis in 0..3 {
+                let s = step(node.exp[axis]);
+                let q_lo = decode(node.origin[axis], s, node.lo[axis][lane]);
+                let q_hi = decode(node.origin[axis], s, node.hi[axis][lane]);
+                assert!(
+                    f64::from(q_lo) <= lo[axis] && f64::from(q_hi) >= hi[axis],
+                    "node {n} lane {lane} axis {axis}: [{q_lo}, {q_hi}] does not hold [{}, {}]",
+                    lo[axis],
+                    hi[axis]
+                );
+            }
+            union = (union.0.inf(&lo), union.1.sup(&hi));
+        }
+        union
+    }
+
+    /// Random triangles of size `size` in a cube of side `spread` around `offset`.
+    fn random_mesh(seed: u64, count: usize, spread: f64, size: f64, offset: f64) -> TriMesh {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+        let mut b = crate::MeshBuilder::new();
+        for _ in 0..count {
+            let p = Vector3::from_fn(|_, _| offset + spread * rng.random::<f64>());
+            let mut corner = || p + Vector3::from_fn(|_, _| size * (rng.random::<f64>() - 0.5));
+            let (q, r) = (corner(), corner());
+            // some axis-aligned (flat boxes: a zero extent on one axis)
+            let r = if rng.random::<f64>() < 0.3 {
+                Vector3::new(r.x, r.y, p.z)
+            } else {
+                r
+            };
+            let q = if rng.random::<f64>() < 0.3 {
+                Vector3::new(q.x, q.y, p.z)
+            } else {
+                q
+            };
+            b.triangle_at(p, q, r, fathom_core::Material::Opaque);
+        }
+        b.build().unwrap().0
+    }
+
+    #[test]
+    fn quantized_boxes_hold_the_exact_boxes_and_hits_equal_the_oracle() {
+        let city = BuildingsParams::default().check().unwrap().mesh().unwrap();
+        let bridge = crate::presets::BridgeParams::default()
+            .check()
+            .unwrap()
+            .mesh()
+            .unwrap();
+        let mut meshes = vec![city, bridge];
+        // tiny and huge triangles, near and far from the origin
+        for (seed, (spread, size, offset)) in [
+            (1e-3, 1e-4, 0.0),
+            (10.0, 1.0, 0.0),
+            (100.0, 0.01, 1e6),
+            (1e5, 50.0, -3e5),
+            (5.0, 20.0, 1e4),
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            meshes.push(random_mesh(seed as u64, 3000, spread, size, offset));
+        }
+        for mesh in &meshes {
+            let caster = BvhCaster::new(mesh);
+            let oracle = crate::BruteForceCaster::new(mesh);
+            check_node(&caster, mesh, 0);
+            // rays from around the mesh at its vertices, edge midpoints and
+            // anywhere: near-edge and grazing cases
+            let (lo, hi) = mesh.bounds().unwrap();
+            let mut hits = 0;
+            for k in 0..400 {
+                let [a, b, c] = mesh.corners((k * 7919) % mesh.len());
+                let f = |i: usize, n: usize| (i % n) as f64 / (n - 1) as f64;
+                let o = lo
+                    + (hi - lo).component_mul(&Vector3::new(f(k, 7), f(k / 7, 5), f(k / 35, 3)))
+                        * 1.2
+                    - (hi - lo) * 0.1;
+                let targets = [a, (a + b) / 2.0, (a + b + c) / 3.0, b + (c - b) * 1e-12];
+                for t in targets {
+                    for r in [
+                        Ray::new(o, t - o, f64::INFINITY),
+                        Ray::new(a - (b - a), b - a, f64::INFINITY),
+                    ] {
+                        let (h, e) = (caster.cast_ray(&r), oracle.cast_ray(&r));
+                        assert_eq!(
+                            h.map(|h| (h.triangle, h.range.to_bits())),
+                            e.map(|e| (e.triangle, e.range.to_bits()))
+                        );
+                        hits += usize::from(h.is_some());
+                    }
+                }
+            }
+            assert!(hits > 400, "{hits}");
+        }
+    }
+
+    /// The `f32` node test never culls a box that the exact ray enters within its
+    /// limit (nor one it misses by less than 1e-9 relative), and its entry is never
+    /// beyond the exact entry (or 0, for an origin inside the box): rays at corners, along edges, in face planes
+    /// (grazing), parallel to axes, from near and far.
+    #[test]
+    fn the_node_test_never_culls_a_box_the_ray_enters() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(35);
+        let mut checked = 0;
+        for round in 0..300 {
+            let scale = [1e-3, 1.0, 50.0, 3e3][round % 4];
+            let offset = [0.0, 0.0, 1e4, -2e5][(round / 4) % 4];
+            // eight boxes (some flat) in one node
+            let boxes: Vec<([f64; 3], [f64; 3])> = (0..WIDTH)
+                .map(|_| {
+                    let lo: [f64; 3] =
+                        std::array::from_fn(|_| offset + scale * rng.random::<f64>());
+                    let hi = lo.map(|l| {
+                        if rng.random::<f64>() < 0.2 {
+                            l
+                        } else {
+                            l + scale * rng.random::<f64>()
+                        }
+                    });
+                    (lo, hi)
+                })
+                .collect();
+            let mut node = WideNode::EMPTY;
+            node.used = u8::MAX;
+            for axis in 0..3 {
+                let intervals: Vec<_> = boxes.iter().map(|b| (b.0[axis], b.1[axis])).collect();
+                let (origin, exp, planes) = quantize_axis(&intervals);
+                node.origin[axis] = origin;
+                node.exp[axis] = exp;
+                for (lane, (ql, qh)) in planes.into_iter().enumerate() {
+                    node.lo[axis][lane] = ql;
+                    node.hi[axis][lane] = qh;
+                }
+            }
+            for lane in 0..WIDTH {
+                // the exact box of the lane (its planes)
+                let p = |side: usize, k: usize| {
+                    let q = [node.lo, node.hi][side][k][lane];
+                    f64::from(decode(node.origin[k], step(node.exp[k]), q))
+                };
+                let (lo, hi) = (
+                    Vector3::from_fn(|k, _| p(0, k)),
+                    Vector3::from_fn(|k, _| p(1, k)),
+                );
+                for _ in 0..12 {
+                    let pick = |rng: &mut rand_chacha::ChaCha8Rng| {
+                        Vector3::from_fn(|k, _| match rng.random_range(0..3) {
+                            0 => lo[k],
+                            1 => hi[k],
+                            _ => lo[k] + (hi[k] - lo[k]) * rng.random::<f64>(),
+                        })
+                    };
+                    let target = pick(&mut rng);
+                    let far = [1.0, 10.0, 1e3][rng.random_range(0..3)] * scale;
+                    let mut o = target + Vector3::from_fn(|_, _| far * (rng.random::<f64>() - 0.5));
+                    let mut d = target - o;
+                    // grazing: in the plane of a face, or along an axis
+                    match rng.random_range(0..4) {
+                        0 => {
+                            let k = rng.random_range(0..3);
+                            o[k] = target[k];
+                            d[k] = 0.0;
+                        }
+                        1 => {
+                            let k = rng.random_range(0..3);
+                            d = Vector3::zeros();
+                            d[k] = if o[k] < target[k] { 1.0 } else { -1.0 };
+                            for j in 0..3 {
+                                if j != k {
+                                    o[j] = target[j];
+                                }
+                            }
+                        }
+                        _ => {}
+                    }
+                    let Some(d) = d.try_normalize(0.0) else {
+                        continue;
+                    };
+                    let (oa, da) = ([o.x, o.y, o.z], [d.x, d.y, d.z]);
+                    let ray = RayF32::new(&oa, &da, &Vector3::zeros());
+                    // the exact interval, in f64
+                    let (mut enter, mut exit) = (f64::NEG_INFINITY, f64::INFINITY);
+                    for k in 0..3 {
+                        if d[k] == 0.0 {
+                            if o[k] < lo[k] || o[k] > hi[k] {
+                                enter = f64::INFINITY;
+                            }
+                        } else {
+                            let (a, b) = ((lo[k] - o[k]) / d[k], (hi[k] - o[k]) / d[k]);
+                            enter = enter.max(a.min(b));
+                            exit = exit.min(a.max(b));
+                        }
+                    }
+                    let tol = 1e-9 * (1.0 + exit.abs().min(1e300));
+                    let limit = round_up(enter.max(0.0) * (1.0 + 1e-9) + 1e-9);
+                    let (near, mask) = BvhCaster::entries(&node, &ray, limit);
+                    if enter <= exit + tol && exit >= -tol {
+                        assert!(
+                            mask & (1 << lane) != 0,
+                            "culled: {o:?} {d:?} [{enter}, {exit}] box {lo:?} {hi:?}"
+                        );
+                        assert!(f64::from(near[lane]) <= enter.max(0.0) + tol);
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(checked > 10_000, "{checked}");
+    }
+
+    #[test]
+    fn gather_sets_the_bit_of_each_flag() {
+        for mask in 0..256u32 {
+            let flags = std::array::from_fn(|i| u8::from(mask & (1 << i) != 0));
+            assert_eq!(gather(flags), mask);
+        }
+    }
+
+    #[test]
+    fn quantize_axis_rounds_outwards() {
+        for kids in [
+            vec![(0.0, 1.0), (0.25, 0.5)],
+            vec![(-1e-9, 1e-9)],
+            vec![(1e6, 1e6 + 1e-3), (1e6 + 5e-4, 1e6 + 2e-3)],
+            vec![(-4096.1, 4096.3), (-0.1, 0.1), (4000.0, 4096.3)],
+            vec![(1.0 / 3.0, 2.0 / 3.0), (0.1, 0.7)],
+        ] {
+            let (origin, exp, planes) = quantize_axis(&kids);
+            for (&(lo, hi), &(ql, qh)) in kids.iter().zip(&planes) {
+                let s = step(exp);
+                assert!(f64::from(decode(origin, s, ql)) <= lo);
+                assert!(f64::from(decode(origin, s, qh)) >= hi);
+                // not looser than two steps per side
+                assert!(
+                    lo - f64::from(decode(origin, s, ql)) <= 2.0 * f64::from(s) + 1e-7 * lo.abs()
+                );
+            }
+        }
     }
 
     #[test]

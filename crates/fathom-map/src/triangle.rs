@@ -38,6 +38,18 @@ fn within(x: f64, lo: f64, hi: f64) -> bool {
     x >= lo && x <= hi
 }
 
+/// `a < b ? a : b`.
+#[inline(always)]
+fn least(a: f64, b: f64) -> f64 {
+    if a < b { a } else { b }
+}
+
+/// `a > b ? a : b`.
+#[inline(always)]
+fn greatest(a: f64, b: f64) -> f64 {
+    if a > b { a } else { b }
+}
+
 #[inline(always)]
 fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
     [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
@@ -98,7 +110,9 @@ impl PreparedTriangle {
         // boxes' widening, so that the BVH never culls a hit this test accepts
         for k in 0..3 {
             let (a, b, c) = (self.v0[k], self.v0[k] + self.e1[k], self.v0[k] + self.e2[k]);
-            let (lo, hi) = (a.min(b).min(c), a.max(b).max(c));
+            // compare-and-select: the corners are finite (`TriMesh`), so this is
+            // `f64::min` / `f64::max` without their NaN rule
+            let (lo, hi) = (least(least(a, b), c), greatest(greatest(a, b), c));
             let p = o[k] + t * d[k];
             if !within(
                 p,
