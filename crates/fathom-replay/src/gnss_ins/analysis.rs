@@ -7,7 +7,8 @@
 //! NEES per dof, filters); per outage window `k` `outage<k>_drift_h_vs_ekf2` (the
 //! horizontal distance from EKF2 at the last instant of the window) and
 //! `outage<k>_max_h_vs_ekf2`; the GNSS updates `gnss_accepted`, `gnss_rejected` and
-//! their NIS (`nis_gnss_*`). EKF2 gets the rows `rmse_h`, `rmse_3d` with truth. With
+//! their NIS (`nis_gnss_*`); the map-aided methods `map_updates`, `map_left_out`,
+//! `map_failed` and `mode_switches`. EKF2 gets the rows `rmse_h`, `rmse_3d` with truth. With
 //! truth, the check `<method>_rmse_h_within_1.5x_ekf2` compares each filter with EKF2.
 
 use fathom_report::output::{Claim, CsvCell, Row};
@@ -34,6 +35,10 @@ fn declare_units(r: &GnssInsReplay, out: &mut Analysis) {
         ("nees_pos", "1"),
         ("gnss_accepted", "count"),
         ("gnss_rejected", "count"),
+        ("map_updates", "count"),
+        ("map_left_out", "count"),
+        ("map_failed", "count"),
+        ("mode_switches", "count"),
     ] {
         out.unit(metric, unit);
     }
@@ -95,6 +100,12 @@ pub(super) fn rows(r: &GnssInsReplay, out: &mut Analysis) {
                     idx.iter().map(|&i| m.vs_ekf2.h[i]).fold(0.0, f64::max),
                 ));
             }
+        }
+        if let Some(c) = &m.trace.map {
+            out.row(Row::new(name, "map_updates", c.map_updates as f64));
+            out.row(Row::new(name, "map_left_out", c.map_left_out as f64));
+            out.row(Row::new(name, "map_failed", c.map_failed as f64));
+            out.row(Row::new(name, "mode_switches", c.switches as f64));
         }
         if m.trace.method.filter == GnssInsFilter::Ins {
             continue;

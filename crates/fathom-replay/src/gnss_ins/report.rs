@@ -18,6 +18,14 @@ fn describe(f: GnssInsFilter) -> &'static str {
         GnssInsFilter::Ekf15 => {
             "GPS/INS, the 15-state filter [dp, dv, psi, b_a, b_g] (gyro bias), closed loop"
         }
+        GnssInsFilter::Grekf => {
+            "the 12-state filter switching from GPS/INS to the GREKF (geometry-based range \
+             EKF: the log's beams cast against the world) while GNSS is away"
+        }
+        GnssInsFilter::Mgpmf => {
+            "the 12-state filter switching from GPS/INS to the MGPMF (marginalized \
+             point-mass filter over north, east and yaw) while GNSS is away"
+        }
     }
 }
 
@@ -60,6 +68,18 @@ pub(super) fn notes(r: &GnssInsReplay, about: &str) -> String {
              is {:.3} m; the checks `*_rmse_h_within_1.5x_ekf2` ask each filter for at most \
              {WITHIN_EKF2} times that.\n\n",
             d.rms_h()
+        );
+    }
+    if let Some(w) = &r.world {
+        let _ = write!(
+            md,
+            "### World\n\nThe map-aided methods cast the log's range beams against the \
+             world {} (moved into the replay's frame). Each switches to the map-aided \
+             update when the fixes the replay uses have fewer satellites than \
+             `map_aided.min_satellites` (a dropped fix counts none) and back when they \
+             have enough again; `map_updates`, `map_left_out` (every beam left out), \
+             `map_failed` and `mode_switches` count what they did.\n\n",
+            fathom_core::echo::echo_message(w)
         );
     }
     if !r.outages.is_empty() {

@@ -6,20 +6,33 @@
 //! outage window skipped), and the recording at every EKF2 row after the start and
 //! inside the IMU data (and inside the truth's span when the log has truth: the state
 //! of the last IMU row, moved to the instant with its velocity).
+//!
+//! The map-aided methods (`grekf`, `mgpmf`, with a world) are the 12-state filter
+//! with a mode switch ([`fathom_estimators::map_aided::ModeSwitch`]): at every GNSS row
+//! it sees the row's satellite count if the replay uses the fix, else 0 (an outage, a
+//! poor fix type); in GPS/INS mode the fix updates the filter, in map-aided mode
+//! each range epoch (the `range.csv` rows of one stamp, after the IMU row at or after
+//! it) does, with the barometric height, through the world
+//! ([`fathom_core::RayCaster`]).
 
-use fathom_data::layout::gnss_ins::{GnssInsLog, GnssRow, TrackRow};
+use fathom_core::RayCaster;
+use fathom_data::layout::gnss_ins::{GnssInsLog, GnssRow, RangeRow, TrackRow};
 use fathom_data::ulog::projection::project;
 use fathom_estimators::GateThreshold;
 use fathom_estimators::error_state::{ACCEL_BIAS, ErrorStateFilter, GYRO_BIAS};
 use fathom_estimators::map_aided::error_model::transition_with_gyro_bias;
-use fathom_estimators::map_aided::{GpsFix, GpsParams, GpsVelocity, Ins12Filter, NominalNav};
+use fathom_estimators::map_aided::{
+    BaroHeight, GpsFix, GpsParams, GpsVelocity, Grekf, Ins12Filter, Mgpmf, ModeSwitch, NavMode,
+    NominalNav, RangeBeam,
+};
 use fathom_ins::ImuIncrement;
 use fathom_ins::earth::normal_gravity;
 use fathom_ins::local_level::{LocalLevelMechanization, LocalLevelState};
+use fathom_map::{BvhCaster, TriMesh};
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
-use super::settings::{GnssInsFilter, GnssInsMethod, GnssInsSettings};
-use super::{FixUpdate, MethodTrace};
+use super::settings::{GnssInsFilter, GnssInsMethod, GnssInsSettings, MapAidedSettings};
+use super::{FixUpdate, MapCounts, MethodTrace};
 use fathom_sim::SimError;
 
 /// The replay's local NED frame: north and east by PX4's projection about `origin`,
@@ -93,6 +106,31 @@ enum Filter {
     Ekf15(Box<ErrorStateFilter>),
 }
 
+enum Aider {
+    Grekf(Box<Grekf>),
+    Mgpmf(Box<Mgpmf>),
+}
+
+/// The map-aided part of a `grekf` / `mgpmf` method.
+struct MapAid {
+    switch: ModeSwitch,
+    aider: Aider,
+    range_epochs: usize,
+    beams: Vec<RangeBeam>,
+}
+
+impl MapAid {
+    fn map_mode(&self) -> bool {
+        self.switch.mode() == NavMode::MapAided
+    }
+}
+
+/// A range epoch of the log: the beams with a direction, within the longest range.
+struct RangeEpoch {
+    beams: Vec<RangeBeam>,
+    baro: Option<BaroHeight>,
+}
+
 /// One method running.
 struct Runner {
     method: GnssInsMethod,
@@ -100,6 +138,7 @@ struct Runner {
     accel_bias: Vector3<f64>,
     gyro_bias: Vector3<f64>,
     filter: Filter,
+    map: Option<MapAid>,
     trace: MethodTrace,
 }
 
@@ -153,8 +192,90 @@ impl Runner {
         Ok(())
     }
 
+    /// The mode switch of a map-aided method sees a GNSS row at `t` with `satellites`
+    /// (0: not used); entering the map-aided mode restarts the GREKF's lock.
+    fn observe_gnss(&mut self, t: f64, satellites: usize) -> Result<(), SimError> {
+        let Some(m) = &mut self.map else {
+            return Ok(());
+        };
+        let before = m.switch.mode();
+        let after = m.switch.observe(t, satellites).map_err(|e| {
+            model(
+                format!("`{}` mode switch at t = {t} s", self.method.name),
+                e,
+            )
+        })?;
+        if before != after
+            && after == NavMode::MapAided
+            && let Aider::Grekf(g) = &mut m.aider
+        {
+            g.reset();
+        }
+        let c = self.trace.map.get_or_insert_with(MapCounts::default);
+        c.switches = m.switch.switches();
+        Ok(())
+    }
+
+    /// The map-aided update of a range epoch at the filter time `t` (map-aided mode
+    /// only); a failing update is counted, not an error.
+    fn map_update(
+        &mut self,
+        ma: &MapAidedSettings,
+        epoch: &RangeEpoch,
+        world: &dyn RayCaster,
+        t: f64,
+    ) -> Result<(), SimError> {
+        let nominal = self.nominal();
+        let (Some(m), Filter::Ekf12(k)) = (&mut self.map, &mut self.filter) else {
+            return Ok(());
+        };
+        m.range_epochs += 1;
+        if !m.map_mode() {
+            return Ok(());
+        }
+        let c = self.trace.map.get_or_insert_with(MapCounts::default);
+        let grid = matches!(m.aider, Aider::Mgpmf(_));
+        if grid && !(m.range_epochs - 1).is_multiple_of(ma.grid_every) {
+            return Ok(());
+        }
+        let stride = if grid { ma.grid_beam_stride } else { 1 };
+        m.beams.clear();
+        m.beams.extend(epoch.beams.iter().step_by(stride).copied());
+        if m.beams.is_empty() && epoch.baro.is_none() {
+            return Ok(());
+        }
+        let baro = epoch.baro.as_ref();
+        let ok = match &mut m.aider {
+            Aider::Grekf(g) => match g.update(k, &nominal, &m.beams, baro, world) {
+                Ok(rep) => {
+                    if rep.all_beams_left_out {
+                        c.map_left_out += 1;
+                    } else {
+                        c.map_updates += 1;
+                    }
+                    true
+                }
+                Err(_) => false,
+            },
+            Aider::Mgpmf(g) => {
+                let ok = g.update(k, &nominal, &m.beams, baro, world).is_ok();
+                c.map_updates += usize::from(ok);
+                ok
+            }
+        };
+        if ok {
+            self.feedback(t)?;
+        } else {
+            c.map_failed += 1;
+        }
+        Ok(())
+    }
+
     /// The GNSS update at the filter time `t` (`rel` from the start).
     fn update(&mut self, s: &GnssInsSettings, fix: &Fix, rel: f64, t: f64) -> Result<(), SimError> {
+        if self.map.as_ref().is_some_and(MapAid::map_mode) {
+            return Ok(());
+        }
         let name = self.method.name.clone();
         let nominal = self.nominal();
         let dof = if s.use_velocity { 6 } else { 3 };
@@ -282,12 +403,83 @@ pub struct Pass {
     pub fixes_used: usize,
 }
 
-/// Runs every method over the log (module docs).
+/// The world mesh moved into the replay's frame: its origin at `origin` (latitude,
+/// longitude rad, altitude m) or, without one, at the frame's origin.
+fn world_in_frame(
+    mesh: &TriMesh,
+    frame: &LocalFrame,
+    origin: Option<[f64; 3]>,
+) -> Result<BvhCaster, SimError> {
+    let shift = origin.map_or(Vector3::zeros(), |o| {
+        Vector3::from(frame.ned([o[0], o[1]], o[2]))
+    });
+    let vertices = mesh.vertices().iter().map(|v| v + shift).collect();
+    let (moved, _) = TriMesh::new(
+        vertices,
+        mesh.triangles().to_vec(),
+        mesh.materials().to_vec(),
+    )
+    .map_err(|e| model("the world moved into the replay's frame".into(), e))?;
+    Ok(BvhCaster::new(&moved))
+}
+
+/// The range epochs after `t0`: rows of one stamp with a beam direction and a
+/// distance in (0, max range]; the barometric height of the latest `baro.csv` row at
+/// or before the stamp, shifted by `baro_offset` (EKF2's altitude at the start minus
+/// the baro's) and referred to `alt0`.
+fn range_epochs(
+    log: &GnssInsLog,
+    ma: &MapAidedSettings,
+    t0: f64,
+    alt0: f64,
+    baro_offset: Option<f64>,
+) -> Vec<(f64, RangeEpoch)> {
+    let rows: &[RangeRow] = log.range.as_deref().unwrap_or(&[]);
+    let baro: &[(f64, f64)] = log.baro.as_deref().unwrap_or(&[]);
+    let mut out: Vec<(f64, RangeEpoch)> = Vec::new();
+    for r in rows.iter().filter(|r| r.time > t0) {
+        if out.last().is_none_or(|(t, _)| *t != r.time) {
+            let k = baro.partition_point(|b| b.0 <= r.time);
+            let baro = match (baro_offset, k) {
+                (Some(off), k) if k > 0 => Some(BaroHeight {
+                    height_m: baro[k - 1].1 + off - alt0,
+                    sigma_m: ma.baro_sigma,
+                }),
+                _ => None,
+            };
+            out.push((
+                r.time,
+                RangeEpoch {
+                    beams: Vec::new(),
+                    baro,
+                },
+            ));
+        }
+        if let (Some(d), Some(e)) = (r.dir_in_body(), out.last_mut())
+            && r.distance > 0.0
+            && r.distance <= ma.max_range
+        {
+            e.1.beams.push(RangeBeam {
+                dir_in_body: Vector3::from(d),
+                range_m: r.distance,
+                sigma_m: ma.range_sigma,
+            });
+        }
+    }
+    out
+}
+
+/// Runs every method over the log (module docs); `world` is the mesh of the
+/// map-aided methods (in the file's frame: moved here into the replay's).
 ///
 /// # Errors
 /// As [`start_row`]; [`SimError::Model`] naming the method and time of a failing
 /// step.
-pub fn run(log: &GnssInsLog, s: &GnssInsSettings) -> Result<Pass, SimError> {
+pub fn run(
+    log: &GnssInsLog,
+    s: &GnssInsSettings,
+    world: Option<&TriMesh>,
+) -> Result<Pass, SimError> {
     let (k0, reference) = start_row(log)?;
     let r0 = reference[k0];
     let frame = LocalFrame {
@@ -302,6 +494,19 @@ pub fn run(log: &GnssInsLog, s: &GnssInsSettings) -> Result<Pass, SimError> {
         nav_from_body: UnitQuaternion::from_euler_angles(e[0], e[1], e[2]),
     };
     let gravity = normal_gravity(r0.lat_lon[0], r0.altitude);
+    let caster = match (world, &s.world) {
+        (Some(mesh), Some(w)) => Some(world_in_frame(mesh, &frame, w.origin)?),
+        _ => None,
+    };
+    let baro_offset = log.baro.as_deref().and_then(|b| {
+        let k = b.partition_point(|x| x.0 <= t0);
+        b.get(k.saturating_sub(1)).map(|x| r0.altitude - x.1)
+    });
+    let epochs = if caster.is_some() {
+        range_epochs(log, &s.map_aided, t0, frame.alt0, baro_offset)
+    } else {
+        Vec::new()
+    };
     let [sp, sv, sa, sba, sbg] = s.sigma0;
     let mut runners = Vec::with_capacity(s.methods.len());
     for m in &s.methods {
@@ -309,14 +514,16 @@ pub fn run(log: &GnssInsLog, s: &GnssInsSettings) -> Result<Pass, SimError> {
             .map_err(|e| model(format!("`{}` start", m.name), e))?;
         let filter = match m.filter {
             GnssInsFilter::Ins => Filter::None,
-            GnssInsFilter::Ekf12 => Filter::Ekf12(Box::new(
-                Ins12Filter::new(
-                    &Ins12Filter::diagonal_covariance([sp, sv, sa, sba]),
-                    t0,
-                    s.noise,
-                )
-                .map_err(|e| model(format!("`{}` start", m.name), e))?,
-            )),
+            GnssInsFilter::Ekf12 | GnssInsFilter::Grekf | GnssInsFilter::Mgpmf => {
+                Filter::Ekf12(Box::new(
+                    Ins12Filter::new(
+                        &Ins12Filter::diagonal_covariance([sp, sv, sa, sba]),
+                        t0,
+                        s.noise,
+                    )
+                    .map_err(|e| model(format!("`{}` start", m.name), e))?,
+                ))
+            }
             GnssInsFilter::Ekf15 => Filter::Ekf15(Box::new(
                 ErrorStateFilter::new(
                     &ErrorStateFilter::diagonal_covariance([sp, sv, sa, sba, sbg]),
@@ -325,13 +532,39 @@ pub fn run(log: &GnssInsLog, s: &GnssInsSettings) -> Result<Pass, SimError> {
                 .map_err(|e| model(format!("`{}` start", m.name), e))?,
             )),
         };
+        let aider = match m.filter {
+            GnssInsFilter::Grekf => Some(Aider::Grekf(Box::new(Grekf::new(s.map_aided.grekf)))),
+            GnssInsFilter::Mgpmf => Some(Aider::Mgpmf(Box::new(Mgpmf::new(s.map_aided.mgpmf)))),
+            _ => None,
+        };
+        let map = match aider {
+            Some(aider) if caster.is_some() => Some(MapAid {
+                switch: ModeSwitch::new(s.map_aided.switch, NavMode::GpsIns, t0)
+                    .map_err(|e| model(format!("`{}` mode switch", m.name), e))?,
+                aider,
+                range_epochs: 0,
+                beams: Vec::new(),
+            }),
+            Some(_) => {
+                return Err(SimError::invalid_argument(
+                    format!("method `{}`", m.name),
+                    "a map-aided filter needs a world (`--world FILE`)",
+                ));
+            }
+            None => None,
+        };
+        let mut trace = MethodTrace::new(m.clone());
+        if map.is_some() {
+            trace.map = Some(MapCounts::default());
+        }
         runners.push(Runner {
             method: m.clone(),
             mech,
             accel_bias: Vector3::zeros(),
             gyro_bias: Vector3::zeros(),
             filter,
-            trace: MethodTrace::new(m.clone()),
+            map,
+            trace,
         });
     }
     let last_imu = log.imu[log.imu.len() - 1].time;
@@ -351,6 +584,7 @@ pub fn run(log: &GnssInsLog, s: &GnssInsSettings) -> Result<Pass, SimError> {
         .collect();
     let mut gnss = log.gnss.iter().filter(|g| g.time > t0).peekable();
     let mut next_instant = instants.iter().peekable();
+    let mut next_epoch = epochs.iter().peekable();
     let mut t_prev = t0;
     let mut fixes_used = 0;
     let mut times = Vec::with_capacity(instants.len());
@@ -382,7 +616,12 @@ pub fn run(log: &GnssInsLog, s: &GnssInsSettings) -> Result<Pass, SimError> {
                 break;
             }
             let rel = fix.time - t0;
-            if fix.fix_type >= s.min_fix_type && !s.in_outage(rel) {
+            let used = fix.fix_type >= s.min_fix_type && !s.in_outage(rel);
+            let satellites = if used { fix.satellites as usize } else { 0 };
+            for run in &mut runners {
+                run.observe_gnss(fix.time, satellites)?;
+            }
+            if used {
                 fixes_used += 1;
                 let f = fix_of(&frame, fix, s);
                 for run in &mut runners {
@@ -390,6 +629,17 @@ pub fn run(log: &GnssInsLog, s: &GnssInsSettings) -> Result<Pass, SimError> {
                 }
             }
             gnss.next();
+        }
+        if let Some(world) = &caster {
+            while let Some((te, epoch)) = next_epoch.peek() {
+                if *te > t {
+                    break;
+                }
+                for run in &mut runners {
+                    run.map_update(&s.map_aided, epoch, world, t)?;
+                }
+                next_epoch.next();
+            }
         }
         t_prev = t;
     }

@@ -1,8 +1,11 @@
 //! The `gnss-ins` replay settings: the schema of `scenarios/gnss-ins.toml` (IMU noise,
-//! GNSS handling with outage windows, initial uncertainty, then a `[[methods]]` list)
-//! and its check into [`GnssInsSettings`].
+//! GNSS handling with outage windows, initial uncertainty, the optional world and the
+//! map-aided filters' tuning, then a `[[methods]]` list) and its check into
+//! [`GnssInsSettings`].
 
 use fathom_estimators::map_aided::{ImuNoise, Ins12Params};
+
+pub use super::map_settings::{MapAidedSettings, MapAidedToml, WorldSettings, WorldToml};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -39,7 +42,16 @@ pub struct GnssInsToml {
     pub gnss: GnssAidToml,
     /// Initial uncertainty of the filters.
     pub initial: GnssInsInitialToml,
-    /// The methods to run on the same log. Default: INS, GPS-INS-12, GPS-INS-15.
+    /// A world mesh for the map-aided filters (`--world FILE` sets `file`). With a
+    /// world and range rows in the log, the methods `GREKF` and `MGPMF` run too
+    /// (added when `[[methods]]` names no map-aided filter). Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub world: Option<WorldToml>,
+    /// Tuning of the map-aided filters (used only with a world).
+    #[serde(default)]
+    pub map_aided: MapAidedToml,
+    /// The methods to run on the same log. Default: INS, GPS-INS-12, GPS-INS-15
+    /// (and GREKF, MGPMF with a world).
     #[serde(default = "default_methods")]
     pub methods: Vec<GnssInsMethodToml>,
 }
@@ -141,8 +153,9 @@ pub struct GnssInsInitialToml {
 pub struct GnssInsMethodToml {
     /// Name in tables, CSV headers and figures (unique).
     pub name: String,
-    /// `"ins"` (strapdown alone), `"gps-ins-12"` (12-state filter) or `"gps-ins-15"`
-    /// (15-state filter with gyro bias).
+    /// `"ins"` (strapdown alone), `"gps-ins-12"` (12-state filter), `"gps-ins-15"`
+    /// (15-state filter with gyro bias), or with a world `"grekf"` / `"mgpmf"` (the
+    /// 12-state filter switching to the map-aided range update while GNSS is away).
     pub filter: String,
 }
 
@@ -170,13 +183,26 @@ pub enum GnssInsFilter {
     Ekf12,
     /// The 15-state filter `[dp, dv, psi, b_a, b_g]`.
     Ekf15,
+    /// The 12-state filter with the GREKF range update while GNSS is away.
+    Grekf,
+    /// The 12-state filter with the MGPMF range update while GNSS is away.
+    Mgpmf,
+}
+
+impl GnssInsFilter {
+    /// Whether it is a map-aided filter (needs a world and range rows).
+    pub fn is_map_aided(self) -> bool {
+        matches!(self, Self::Grekf | Self::Mgpmf)
+    }
 }
 
 /// The `filter` values.
-pub const FILTERS: [(&str, GnssInsFilter); 3] = [
+pub const FILTERS: [(&str, GnssInsFilter); 5] = [
     ("ins", GnssInsFilter::Ins),
     ("gps-ins-12", GnssInsFilter::Ekf12),
     ("gps-ins-15", GnssInsFilter::Ekf15),
+    ("grekf", GnssInsFilter::Grekf),
+    ("mgpmf", GnssInsFilter::Mgpmf),
 ];
 
 /// A checked method.
@@ -191,6 +217,8 @@ pub struct GnssInsMethod {
 /// Checked settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GnssInsSettings {
+    /// The settings file's label (errors found later name it).
+    pub file: String,
     /// `[data] dir`.
     pub data_dir: String,
     /// IMU noise PSDs of the 12-state model.
@@ -209,6 +237,10 @@ pub struct GnssInsSettings {
     pub outages: Vec<[f64; 2]>,
     /// Initial σ: position, velocity, attitude, accel bias, gyro bias.
     pub sigma0: [f64; 5],
+    /// The world, if any.
+    pub world: Option<WorldSettings>,
+    /// The map-aided filters' tuning.
+    pub map_aided: MapAidedSettings,
     /// The methods.
     pub methods: Vec<GnssInsMethod>,
 }
@@ -296,18 +328,54 @@ impl GnssInsToml {
                             file,
                             format!("methods[{k}].filter"),
                             format!(
-                                "unknown filter \"{}\"; use one of: ins, gps-ins-12, gps-ins-15",
+                                "unknown filter \"{}\"; use one of: ins, gps-ins-12, gps-ins-15, \
+                                 grekf, mgpmf",
                                 fathom_core::echo::echo(&m.filter)
                             ),
                         )
                     })?;
+                if filter.is_map_aided() && self.world.is_none() {
+                    return Err(SimError::invalid(
+                        file,
+                        format!("methods[{k}].filter"),
+                        format!(
+                            "\"{}\" needs a world: give `--world FILE` (or `[world] file`)",
+                            m.filter
+                        ),
+                    ));
+                }
                 Ok(GnssInsMethod {
                     name: m.name.clone(),
                     filter,
                 })
             })
-            .collect::<Result<Vec<_>, SimError>>()?;
+            .collect::<Result<Vec<GnssInsMethod>, SimError>>()?;
+        let world = self.world.as_ref().map(|w| w.check(file)).transpose()?;
+        let map_aided = self.map_aided.check(file)?;
+        let mut methods = methods;
+        if world.is_some() && !methods.iter().any(|m| m.filter.is_map_aided()) {
+            for (name, filter) in [
+                ("GREKF", GnssInsFilter::Grekf),
+                ("MGPMF", GnssInsFilter::Mgpmf),
+            ] {
+                if methods.iter().any(|m| m.name == name) {
+                    return Err(SimError::invalid(
+                        file,
+                        "methods",
+                        format!(
+                            "a method is named \"{name}\", the name of the map-aided method a \
+                             world adds: rename it, or list the map-aided methods yourself"
+                        ),
+                    ));
+                }
+                methods.push(GnssInsMethod {
+                    name: name.into(),
+                    filter,
+                });
+            }
+        }
         Ok(GnssInsSettings {
+            file: file.to_string(),
             data_dir: self.data.dir.clone(),
             noise,
             gyro_bias_psd: gbrw * gbrw,
@@ -320,6 +388,8 @@ impl GnssInsToml {
             gate_probability: p,
             outages,
             sigma0,
+            world,
+            map_aided,
             methods,
         })
     }
