@@ -50,6 +50,10 @@ pub struct FixUpdate {
     pub dof: usize,
     /// Whether it passed the gate and was applied.
     pub accepted: bool,
+    /// Whether it re-acquired the position after a run of rejected fixes (the
+    /// covariance widened by the error the fix showed, then the fix applied).
+    #[serde(default)]
+    pub reset: bool,
 }
 
 /// What a map-aided method did.
@@ -202,6 +206,9 @@ pub struct GnssInsReplay {
     pub outages: Vec<[f64; 2]>,
     /// The world the map-aided methods used (what was read), if any.
     pub world: Option<String>,
+    /// `gnss.reacquire_after_rejections` (0: no re-acquisition).
+    #[serde(default)]
+    pub reacquire_after: usize,
     /// Rows read: IMU, GNSS, baro, magnetometer, range, reference, truth.
     pub rows: [usize; 7],
 }
@@ -325,6 +332,7 @@ pub fn replay(
         fixes,
         outages: settings.outages.clone(),
         world: None,
+        reacquire_after: settings.reacquire_after,
         rows: [
             log.imu.len(),
             log.gnss.len(),

@@ -70,6 +70,18 @@ pub(super) fn notes(r: &GnssInsReplay, about: &str) -> String {
             d.rms_h()
         );
     }
+    if r.reacquire_after > 0 {
+        let _ = write!(
+            md,
+            "### GNSS re-acquisition\n\nWhen {} fixes in a row fail a filter's gate, the \
+             last of them resets it onto the fixes: its position (and, with the fix \
+             velocity, velocity) covariance is widened by the outer product of the error \
+             the fix shows and the fix applied. `gnss_resets` counts these resets per \
+             method (`gnss_updates.csv`: `reset` 1); many resets mean the filter's model \
+             (its IMU noise) is too optimistic for the log.\n\n",
+            r.reacquire_after
+        );
+    }
     if let Some(w) = &r.world {
         let _ = write!(
             md,

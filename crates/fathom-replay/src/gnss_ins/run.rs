@@ -19,11 +19,11 @@ use fathom_core::RayCaster;
 use fathom_data::layout::gnss_ins::{GnssInsLog, GnssRow, RangeRow, TrackRow};
 use fathom_data::ulog::projection::project;
 use fathom_estimators::GateThreshold;
-use fathom_estimators::error_state::{ACCEL_BIAS, ErrorStateFilter, GYRO_BIAS};
+use fathom_estimators::error_state::{ACCEL_BIAS, ErrorStateFilter, GYRO_BIAS, POS, VEL};
 use fathom_estimators::map_aided::error_model::transition_with_gyro_bias;
 use fathom_estimators::map_aided::{
-    BaroHeight, GpsFix, GpsParams, GpsVelocity, Grekf, Ins12Filter, Mgpmf, ModeSwitch, NavMode,
-    NominalNav, RangeBeam,
+    BaroHeight, GpsFix, GpsParams, GpsReacquire, GpsVelocity, Grekf, Ins12Filter, Mgpmf,
+    ModeSwitch, NavMode, NominalNav, RangeBeam,
 };
 use fathom_ins::ImuIncrement;
 use fathom_ins::earth::normal_gravity;
@@ -106,6 +106,56 @@ enum Filter {
     Ekf15(Box<ErrorStateFilter>),
 }
 
+/// The 15-state filter's GNSS update: position, then (with `use_velocity`, after an
+/// accepted position) velocity, both gated; returns whether the position passed and
+/// the summed NIS.
+fn update15(
+    k: &mut ErrorStateFilter,
+    nominal: &NominalNav,
+    fix: &Fix,
+    use_velocity: bool,
+    gate: GateThreshold,
+) -> (bool, f64) {
+    match k.update_position(&nominal.pos_in_nav, &fix.pos, &fix.pos_cov, Some(gate)) {
+        Ok(g) if g.is_accepted() => {
+            let mut nis = g.nis();
+            if use_velocity {
+                // sequential velocity update (block-diagonal R)
+                let v = k.update_velocity(&nominal.vel_in_nav, &fix.vel, &fix.vel_cov, Some(gate));
+                nis += v.as_ref().map_or(f64::NAN, |g| g.nis());
+            }
+            (true, nis)
+        }
+        Ok(g) => (false, g.nis()),
+        Err(_) => (false, f64::NAN),
+    }
+}
+
+/// The 15-state filter's re-acquisition (the 12-state filter's
+/// `map_aided::GpsReacquire` rule): the position (and with `use_velocity` the
+/// velocity) covariance widened by the outer product of the error the fix shows, then
+/// the fix applied to a copy; the copy and its NIS when the fix now passes the gate
+/// (the estimate jumps to the fix), else `None` (the filter is kept).
+fn reacquire15(
+    k: &ErrorStateFilter,
+    nominal: &NominalNav,
+    fix: &Fix,
+    use_velocity: bool,
+    gate: GateThreshold,
+) -> Option<(ErrorStateFilter, f64)> {
+    let mut k2 = k.clone();
+    let dp = fix.pos - nominal.pos_in_nav;
+    k2.widen_covariance_block(POS, &(dp * dp.transpose()))
+        .ok()?;
+    if use_velocity {
+        let dv = fix.vel - nominal.vel_in_nav;
+        k2.widen_covariance_block(VEL, &(dv * dv.transpose()))
+            .ok()?;
+    }
+    let (accepted, nis) = update15(&mut k2, nominal, fix, use_velocity, gate);
+    accepted.then_some((k2, nis))
+}
+
 enum Aider {
     Grekf(Box<Grekf>),
     Mgpmf(Box<Mgpmf>),
@@ -139,6 +189,10 @@ struct Runner {
     gyro_bias: Vector3<f64>,
     filter: Filter,
     map: Option<MapAid>,
+    /// Fixes the 12-state filter rejected in a row (its re-acquisition).
+    reacquire12: GpsReacquire,
+    /// Fixes the 15-state filter rejected in a row.
+    rejected_in_a_row: usize,
     trace: MethodTrace,
 }
 
@@ -271,7 +325,9 @@ impl Runner {
         Ok(())
     }
 
-    /// The GNSS update at the filter time `t` (`rel` from the start).
+    /// The GNSS update at the filter time `t` (`rel` from the start), with the
+    /// re-acquisition after `gnss.reacquire_after_rejections` fixes rejected in a row
+    /// ([`reacquire15`]; the 12-state filter: `map_aided::GpsReacquire`).
     fn update(&mut self, s: &GnssInsSettings, fix: &Fix, rel: f64, t: f64) -> Result<(), SimError> {
         if self.map.as_ref().is_some_and(MapAid::map_mode) {
             return Ok(());
@@ -279,12 +335,12 @@ impl Runner {
         let name = self.method.name.clone();
         let nominal = self.nominal();
         let dof = if s.use_velocity { 6 } else { 3 };
-        let (accepted, nis) = match &mut self.filter {
+        let (accepted, nis, reset) = match &mut self.filter {
             Filter::None => return Ok(()),
             Filter::Ekf12(k) => {
                 let aiding = GpsParams {
                     gate_probability: s.gate_probability,
-                    reacquire_after_rejections: 0,
+                    reacquire_after_rejections: s.reacquire_after,
                 }
                 .check()
                 .map_err(|e| model(format!("`{name}` gate"), e))?;
@@ -296,32 +352,32 @@ impl Runner {
                         cov: fix.vel_cov,
                     }),
                 };
-                match k.update_gps(&nominal, &gps, &aiding) {
-                    Ok(o) => (o.accepted, o.nis),
-                    Err(_) => (false, f64::NAN),
+                match self.reacquire12.update(k, &nominal, &gps, &aiding) {
+                    Ok(o) => (o.accepted, o.nis, o.reacquired),
+                    Err(_) => (false, f64::NAN, false),
                 }
             }
             Filter::Ekf15(k) => {
                 let gate = GateThreshold::from_chi_square_probability(s.gate_probability, 3)
                     .map_err(|e| model(format!("`{name}` gate"), e))?;
-                let p = k.update_position(&nominal.pos_in_nav, &fix.pos, &fix.pos_cov, Some(gate));
-                match p {
-                    Ok(g) if g.is_accepted() => {
-                        let mut nis = g.nis();
-                        if s.use_velocity {
-                            // sequential velocity update (block-diagonal R)
-                            let v = k.update_velocity(
-                                &nominal.vel_in_nav,
-                                &fix.vel,
-                                &fix.vel_cov,
-                                Some(gate),
-                            );
-                            nis += v.as_ref().map_or(f64::NAN, |g| g.nis());
+                let (accepted, nis) = update15(k, &nominal, fix, s.use_velocity, gate);
+                if accepted {
+                    self.rejected_in_a_row = 0;
+                    (true, nis, false)
+                } else {
+                    self.rejected_in_a_row += 1;
+                    let n = s.reacquire_after;
+                    match (n > 0 && self.rejected_in_a_row >= n)
+                        .then(|| reacquire15(k, &nominal, fix, s.use_velocity, gate))
+                        .flatten()
+                    {
+                        Some((k2, nis2)) => {
+                            **k = k2;
+                            self.rejected_in_a_row = 0;
+                            (true, nis2, true)
                         }
-                        (true, nis)
+                        None => (false, nis, false),
                     }
-                    Ok(g) => (false, g.nis()),
-                    Err(_) => (false, f64::NAN),
                 }
             }
         };
@@ -330,6 +386,7 @@ impl Runner {
             nis,
             dof,
             accepted,
+            reset,
         });
         if accepted {
             self.feedback(t)?;
@@ -564,6 +621,8 @@ pub fn run(
             gyro_bias: Vector3::zeros(),
             filter,
             map,
+            reacquire12: GpsReacquire::default(),
+            rejected_in_a_row: 0,
             trace,
         });
     }
@@ -658,4 +717,48 @@ pub fn run(
         traces: runners.into_iter().map(|r| r.trace).collect(),
         fixes_used,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The 15-state re-acquisition: a filter 50 m off rejects the fix; widened by
+    /// the error the fix shows, the fix passes and the correction takes the estimate
+    /// onto it; a consistent fix needs no re-acquisition.
+    #[test]
+    fn the_15_state_reacquisition_jumps_onto_the_fix() {
+        let p0 = ErrorStateFilter::diagonal_covariance([1.0, 0.5, 0.05, 0.2, 0.01]);
+        let mut k = ErrorStateFilter::new(&p0, 0.0).unwrap();
+        let nominal = NominalNav {
+            pos_in_nav: Vector3::zeros(),
+            vel_in_nav: Vector3::zeros(),
+            nav_from_body: UnitQuaternion::identity(),
+            accel_bias_in_body: Vector3::zeros(),
+        };
+        let fix = Fix {
+            pos: Vector3::new(30.0, -40.0, 2.0),
+            pos_cov: Matrix3::identity(),
+            vel: Vector3::new(1.0, 0.0, 0.0),
+            vel_cov: Matrix3::identity() * 0.1,
+        };
+        let gate = GateThreshold::from_chi_square_probability(0.9999, 3).unwrap();
+        let before = k.clone();
+        assert!(!update15(&mut k, &nominal, &fix, true, gate).0);
+        assert_eq!(k, before, "a rejected fix leaves the filter");
+        let (mut k2, nis) = reacquire15(&k, &nominal, &fix, true, gate).unwrap();
+        assert!(nis.is_finite() && nis < 2.0, "{nis}");
+        let dx = k2.take_correction().unwrap();
+        // estimated minus true: the nominal is (-30, 40, -2) from the fix
+        assert!(
+            (dx[0] + 30.0).abs() < 0.5 && (dx[1] - 40.0).abs() < 0.5,
+            "{dx}"
+        );
+        let near = Fix {
+            pos: Vector3::new(0.5, -0.5, 0.0),
+            ..fix
+        };
+        let mut k3 = before.clone();
+        assert!(update15(&mut k3, &nominal, &near, false, gate).0);
+    }
 }

@@ -101,10 +101,28 @@ pub struct GnssAidToml {
     ///
     /// Range: 0 to 1 (exclusive).
     pub gate_probability: f64,
+    /// Re-acquisition: the fix that makes this many in a row rejected by the gate
+    /// resets the filter onto the fixes: the position (and, with `use_velocity`, the
+    /// velocity) covariance is widened by the outer product of the error the fix
+    /// shows and the fix applied (it then passes the gate). Counted per method
+    /// (`gnss_resets`). 0: never (a diverged filter rejects every fix for ever).
+    ///
+    /// Range: 0 to 1000.
+    #[serde(default = "default_reacquire")]
+    pub reacquire_after_rejections: usize,
     /// Outage windows: fixes in `[start_s, end_s)` (seconds from the replay's start)
     /// are dropped.
     #[serde(default)]
     pub outages: Vec<OutageToml>,
+}
+
+/// The default of `gnss.reacquire_after_rejections`: 5 fixes (1 s of a 5 Hz
+/// receiver). A consistent filter rejects a consistent fix with the probability
+/// `1 - gnss.gate_probability` (1e-4 in the preset), five in a row practically
+/// never: such a run means the filter diverged (or the receiver jumped for a
+/// second and more, which the filter then follows).
+pub fn default_reacquire() -> usize {
+    5
 }
 
 /// One GNSS outage.
@@ -233,6 +251,8 @@ pub struct GnssInsSettings {
     pub use_velocity: bool,
     /// Gate probability.
     pub gate_probability: f64,
+    /// Fixes rejected in a row before the re-acquisition (0: never).
+    pub reacquire_after: usize,
     /// Outage windows `[start, end)`, s from the start, sorted.
     pub outages: Vec<[f64; 2]>,
     /// Initial σ: position, velocity, attitude, accel bias, gyro bias.
@@ -286,6 +306,16 @@ impl GnssInsToml {
                 file,
                 "gnss.gate_probability",
                 format!("must be strictly between 0 and 1, got {p}"),
+            ));
+        }
+        if g.reacquire_after_rejections > 1000 {
+            return Err(SimError::invalid(
+                file,
+                "gnss.reacquire_after_rejections",
+                format!(
+                    "must be 0 (never) to 1000, got {}",
+                    g.reacquire_after_rejections
+                ),
             ));
         }
         let mut outages = Vec::with_capacity(g.outages.len());
@@ -386,6 +416,7 @@ impl GnssInsToml {
             ],
             use_velocity: g.use_velocity,
             gate_probability: p,
+            reacquire_after: g.reacquire_after_rejections,
             outages,
             sigma0,
             world,
@@ -437,5 +468,22 @@ mod tests {
         assert!(e(fix).contains("gnss.min_fix_type"));
         let sigma = GNSS_INS_PRESET.replace("sigma_att_rad = 0.05", "sigma_att_rad = 0.0");
         assert!(e(sigma).contains("initial.sigma_att_rad"));
+        // re-acquisition: 5 built in, 0 (never) accepted, beyond 1000 refused, the
+        // default when the key is left out
+        assert_eq!(s.reacquire_after, 5);
+        let key = "reacquire_after_rejections = 5 ";
+        assert!(GNSS_INS_PRESET.contains(key));
+        let never = GNSS_INS_PRESET.replace(key, "reacquire_after_rejections = 0 ");
+        assert_eq!(parse_settings(&never, "p.toml").unwrap().reacquire_after, 0);
+        let huge = GNSS_INS_PRESET.replace(key, "reacquire_after_rejections = 5000 ");
+        assert!(e(huge).contains("gnss.reacquire_after_rejections"));
+        let line = GNSS_INS_PRESET
+            .lines()
+            .find(|l| l.starts_with(key))
+            .unwrap()
+            .to_string();
+        let left_out = GNSS_INS_PRESET.replace(&format!("{line}\n"), "");
+        let d = parse_settings(&left_out, "p.toml").unwrap();
+        assert_eq!(d.reacquire_after, default_reacquire());
     }
 }
