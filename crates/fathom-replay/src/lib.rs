@@ -21,6 +21,7 @@
 //!   innovations with ±3√S, NIS against a consistent filter's interval);
 //! - [`data_dir`]: where a replay's data folder is;
 //! - [`method_keys`]: the values each `[[methods]]` key of a replay accepts;
+//! - [`scene_mesh`]: a world mesh as the scene page draws it;
 //! - [`world_file`]: a user's OBJ / STL world read with its checks (the `urban`
 //!   experiment's world files and the `gnss-ins` replay's `--world`).
 //!
@@ -36,6 +37,7 @@ pub mod method_keys;
 pub mod own_log;
 pub mod plaza;
 pub mod range_beacon;
+pub mod scene_mesh;
 pub mod world_file;
 
 use fathom_sim::experiment::DynExperiment;

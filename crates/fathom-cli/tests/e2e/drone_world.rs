@@ -4,7 +4,8 @@
 //! and truth, and its world as an OBJ file; GNSS dropped by an outage window while
 //! the vehicle is under the deck. The map-aided methods run, stay finite and within
 //! the GPS/INS filter's error there; without `--world` they are absent; `--world`
-//! on a log without range rows is one line with exit code 2.
+//! on a log without range rows is one line with exit code 2. With a world the replay
+//! writes its scene page.
 
 use std::path::Path;
 
@@ -141,6 +142,9 @@ fn map_aided_filters_replay_a_drone_log_with_a_user_world() {
     }
     let report = std::fs::read_to_string(root.join("o/report.md")).unwrap();
     assert!(report.contains("### World") && report.contains("world.obj"));
+    // the scene page: the world, the truth and the methods with their modes
+    let page = std::fs::read_to_string(root.join("o/scene.html")).unwrap();
+    assert!(page.contains("gnss-ins replay with the world") && page.contains("map-aided"));
     // without --world: no map-aided methods
     let r = fathom(
         &root,
@@ -160,6 +164,10 @@ fn map_aided_filters_replay_a_drone_log_with_a_user_world() {
     for m in ["GREKF", "MGPMF"] {
         assert!(s.rows.iter().all(|r| r.method != m), "{m} without a world");
     }
+    assert!(
+        !root.join("plain/scene.html").exists(),
+        "no world, no scene page"
+    );
     // --world on a log without range rows: one line, exit code 2
     let sitl = repo_root().join("data/ulog/sitl_groundtruth.ulg");
     usage_error(

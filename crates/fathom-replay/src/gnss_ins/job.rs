@@ -24,6 +24,8 @@ pub struct Prepared {
     settings: GnssInsSettings,
     /// The world mesh (in its file's frame) and what was read, with `[world]`.
     world: Option<(TriMesh, String)>,
+    /// Whether a replay with a world writes `scene.html` (not with `--no-scene`).
+    scene_page: bool,
     /// The log's description (its manifest's, or the ULog conversion's: the same
     /// text for the same flight).
     about: String,
@@ -113,6 +115,7 @@ impl Experiment for GnssIns {
         Ok(Prepared {
             settings,
             world,
+            scene_page: env.scene_page,
             about,
             log,
         })
@@ -158,6 +161,10 @@ impl Experiment for GnssIns {
         analysis::rows(&r, out);
         analysis::csv_files(&r, out)?;
         figures::write(&r, out)?;
+        if let (Some((mesh, _)), true) = (&p.world, p.scene_page) {
+            let title = format!("gnss-ins replay with the world {}", p.settings.world_file());
+            out.page("scene.html", super::scene::page(&r, mesh, &title)?)?;
+        }
         out.report(&report::notes(&r, &p.about));
         Ok(())
     }

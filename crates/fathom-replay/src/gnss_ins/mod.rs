@@ -25,6 +25,7 @@ mod job;
 mod map_settings;
 mod report;
 pub mod run;
+mod scene;
 mod settings;
 
 pub use job::{GnssIns, Prepared, read_log};
@@ -84,6 +85,9 @@ pub struct MethodTrace {
     pub updates: Vec<FixUpdate>,
     /// The map-aided methods' counters.
     pub map: Option<MapCounts>,
+    /// The map-aided methods' mode at the instants (true: map-aided).
+    #[serde(default)]
+    pub map_mode: Option<Vec<bool>>,
 }
 
 impl MethodTrace {
@@ -95,6 +99,7 @@ impl MethodTrace {
             cov_pos: None,
             updates: Vec::new(),
             map: None,
+            map_mode: None,
         }
     }
 
@@ -206,6 +211,9 @@ pub struct GnssInsReplay {
     pub outages: Vec<[f64; 2]>,
     /// The world the map-aided methods used (what was read), if any.
     pub world: Option<String>,
+    /// Where the world's origin lies in the local frame (NED, m), with a world.
+    #[serde(default)]
+    pub world_shift: Option<[f64; 3]>,
     /// `gnss.reacquire_after_rejections` (0: no re-acquisition).
     #[serde(default)]
     pub reacquire_after: usize,
@@ -332,6 +340,7 @@ pub fn replay(
         fixes,
         outages: settings.outages.clone(),
         world: None,
+        world_shift: pass.world_shift,
         reacquire_after: settings.reacquire_after,
         rows: [
             log.imu.len(),

@@ -426,6 +426,10 @@ impl Runner {
     }
 
     fn record(&mut self, dt_to_instant: f64) {
+        if let Some(m) = &self.map {
+            let mode = m.map_mode();
+            self.trace.map_mode.get_or_insert_with(Vec::new).push(mode);
+        }
         let s = self.mech.state();
         let pos = s.pos_in_nav + s.vel_in_nav * dt_to_instant;
         self.trace.pos_in_nav.push(pos.into());
@@ -458,18 +462,22 @@ pub struct Pass {
     pub traces: Vec<MethodTrace>,
     /// Fixes used (3D or better, outside the outages).
     pub fixes_used: usize,
+    /// Where the world's origin lies in the frame (NED, m), with a world.
+    pub world_shift: Option<[f64; 3]>,
 }
 
-/// The world mesh moved into the replay's frame: its origin at `origin` (latitude,
+/// Where the world's origin lies in the replay's frame: at `origin` (latitude,
 /// longitude rad, altitude m) or, without one, at the frame's origin.
-fn world_in_frame(
-    mesh: &TriMesh,
-    frame: &LocalFrame,
-    origin: Option<[f64; 3]>,
-) -> Result<BvhCaster, SimError> {
-    let shift = origin.map_or(Vector3::zeros(), |o| {
-        Vector3::from(frame.ned([o[0], o[1]], o[2]))
-    });
+fn world_shift(frame: &LocalFrame, origin: Option<[f64; 3]>) -> [f64; 3] {
+    origin.map_or([0.0; 3], |o| frame.ned([o[0], o[1]], o[2]))
+}
+
+/// The world mesh moved by `shift` (NED, m) into the replay's frame.
+///
+/// # Errors
+/// [`SimError::Model`] for a vertex the mesh refuses after the move.
+pub fn moved_mesh(mesh: &TriMesh, shift: [f64; 3]) -> Result<TriMesh, SimError> {
+    let shift = Vector3::from(shift);
     let vertices = mesh.vertices().iter().map(|v| v + shift).collect();
     let (moved, _) = TriMesh::new(
         vertices,
@@ -477,7 +485,7 @@ fn world_in_frame(
         mesh.materials().to_vec(),
     )
     .map_err(|e| model("the world moved into the replay's frame".into(), e))?;
-    Ok(BvhCaster::new(&moved))
+    Ok(moved)
 }
 
 /// The range epochs after `t0`: rows of one stamp with a beam direction and a
@@ -551,8 +559,9 @@ pub fn run(
         nav_from_body: UnitQuaternion::from_euler_angles(e[0], e[1], e[2]),
     };
     let gravity = normal_gravity(r0.lat_lon[0], r0.altitude);
-    let caster = match (world, &s.world) {
-        (Some(mesh), Some(w)) => Some(world_in_frame(mesh, &frame, w.origin)?),
+    let shift = s.world.as_ref().map(|w| world_shift(&frame, w.origin));
+    let caster = match (world, shift) {
+        (Some(mesh), Some(shift)) => Some(BvhCaster::new(&moved_mesh(mesh, shift)?)),
         _ => None,
     };
     let baro_offset = log.baro.as_deref().and_then(|b| {
@@ -716,6 +725,7 @@ pub fn run(
         ekf2,
         traces: runners.into_iter().map(|r| r.trace).collect(),
         fixes_used,
+        world_shift: caster.is_some().then_some(shift).flatten(),
     })
 }
 

@@ -266,6 +266,13 @@ pub struct GnssInsSettings {
 }
 
 impl GnssInsSettings {
+    /// The world file as written (bounded for display), or `-` without one.
+    pub fn world_file(&self) -> String {
+        self.world
+            .as_ref()
+            .map_or_else(|| "-".into(), |w| fathom_core::echo::echo_file(&w.file))
+    }
+
     /// Whether `t` (s from the start) is inside an outage.
     pub fn in_outage(&self, t: f64) -> bool {
         self.outages.iter().any(|w| t >= w[0] && t < w[1])
