@@ -42,6 +42,11 @@ pub(crate) struct UlogArgs {
     /// built in.
     #[arg(long, value_name = "FILE")]
     pub(crate) config: Option<PathBuf>,
+    /// A world mesh (Wavefront OBJ or STL, the `urban` experiment's readers and
+    /// limits) for the map-aided filters GREKF and MGPMF on the log's range beams
+    /// (sets the settings' `[world] file`); the log must have range rows.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) world: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) output: ReplayOut,
 }
@@ -125,6 +130,11 @@ pub(crate) struct GnssInsArgs {
     /// GNSS floors and outages, the filters); default: built in.
     #[arg(long, value_name = "FILE")]
     pub(crate) config: Option<PathBuf>,
+    /// A world mesh (Wavefront OBJ or STL, the `urban` experiment's readers and
+    /// limits) for the map-aided filters GREKF and MGPMF on the log's range beams
+    /// (sets the settings' `[world] file`); the log must have range rows.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) world: Option<PathBuf>,
     #[command(flatten)]
     pub(crate) output: ReplayOut,
 }
@@ -135,6 +145,8 @@ struct Request<'a> {
     /// The data folder; `None`: the settings' `[data] dir`.
     dir: Option<&'a Path>,
     config: Option<&'a Path>,
+    /// `--world` of the `gnss-ins` replays.
+    world: Option<&'a Path>,
     out: PathBuf,
     force: bool,
 }
@@ -159,6 +171,7 @@ pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
                 exp: &Plaza,
                 dir: a.dir.as_deref(),
                 config: a.config.as_deref(),
+                world: None,
                 out: a.out.clone().unwrap_or_else(|| replay_out(&Plaza)),
                 force: a.force,
             }
@@ -170,7 +183,10 @@ pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
             &a.output,
         ),
         ReplayData::InsDvl(a) => own(&InsDvl, a.dir.as_deref(), a.config.as_deref(), &a.output),
-        ReplayData::GnssIns(a) => own(&GnssIns, a.dir.as_deref(), a.config.as_deref(), &a.output),
+        ReplayData::GnssIns(a) => Request {
+            world: a.world.as_deref(),
+            ..own(&GnssIns, a.dir.as_deref(), a.config.as_deref(), &a.output)
+        },
         ReplayData::Ulog(a) => {
             if !a.file.is_file() {
                 return Err(Failure::Usage(anyhow!(
@@ -182,6 +198,7 @@ pub(crate) fn replay_cmd(cmd: &ReplayData) -> Result<String, Failure> {
                 exp: &GnssIns,
                 dir: Some(a.file.as_path()),
                 config: a.config.as_deref(),
+                world: a.world.as_deref(),
                 out: a.output.out.clone().unwrap_or_else(|| replay_out(&GnssIns)),
                 force: a.output.force,
             }
@@ -201,6 +218,7 @@ fn own<'a>(
         exp,
         dir,
         config,
+        world: None,
         out: output.out.clone().unwrap_or_else(|| replay_out(exp)),
         force: output.force,
     }
@@ -236,14 +254,43 @@ fn settings_text(
 fn load_settings(
     exp: &dyn DynExperiment,
     config: Option<&Path>,
+    world: Option<&Path>,
 ) -> Result<(String, String), Failure> {
     let (text, label) = settings_text(
         config,
         exp.preset(),
         &format!("built-in {}", exp.default_scenario()),
     )?;
+    let text = match world {
+        Some(w) => with_world(&text, w)?,
+        None => text,
+    };
     exp.resolve(&text, &label, None, None).map_err(failure)?;
     Ok((text, label))
+}
+
+/// `text` with its `[world] file` set to `world` (made absolute; the table added
+/// when missing).
+fn with_world(text: &str, world: &Path) -> Result<String, Failure> {
+    let mut table: toml::Table = toml::from_str(text)
+        .context("settings")
+        .map_err(Failure::Usage)?;
+    let file = std::path::absolute(world)
+        .with_context(|| format!("cannot resolve `{}`", world.display()))
+        .map_err(Failure::Usage)?;
+    let entry = table
+        .entry("world")
+        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    let w = entry
+        .as_table_mut()
+        .ok_or_else(|| Failure::Usage(anyhow!("settings: `world` is not a table")))?;
+    w.insert(
+        "file".into(),
+        toml::Value::String(file.display().to_string()),
+    );
+    toml::to_string(&table)
+        .context("settings")
+        .map_err(Failure::Run)
 }
 
 /// The settings' `[data] dir`, as written.
@@ -272,7 +319,7 @@ fn with_data_dir(text: &str, dir: &Path) -> Result<String, Failure> {
 }
 
 fn replay(r: &Request<'_>) -> Result<String, Failure> {
-    let (text, label) = load_settings(r.exp, r.config)?;
+    let (text, label) = load_settings(r.exp, r.config, r.world)?;
     let (text, data) = match r.dir {
         Some(dir) => (with_data_dir(&text, dir)?, dir.display().to_string()),
         None => {
@@ -329,7 +376,7 @@ mod tests {
             &InsDvl,
             &GnssIns,
         ] {
-            assert!(load_settings(exp, None).is_ok(), "{}", exp.name());
+            assert!(load_settings(exp, None, None).is_ok(), "{}", exp.name());
         }
         let dir = std::env::temp_dir().join(format!("fathom-cli-test-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
@@ -339,7 +386,7 @@ mod tests {
             <Plaza as Experiment>::PRESET.replace("sigma_m = 1.0", "sigma_m = -1.0"),
         )
         .unwrap();
-        match load_settings(&Plaza, Some(&bad)) {
+        match load_settings(&Plaza, Some(&bad), None) {
             Err(Failure::Usage(e)) => {
                 let s = format!("{e:#}");
                 assert!(
@@ -350,7 +397,7 @@ mod tests {
             other => panic!("expected a usage error, got {other:?}"),
         }
         assert!(matches!(
-            load_settings(&Plaza, Some(&dir.join("missing.toml"))),
+            load_settings(&Plaza, Some(&dir.join("missing.toml")), None),
             Err(Failure::Usage(_))
         ));
         let args = PlazaArgs {

@@ -229,6 +229,36 @@ impl ErrorStateFilter {
         self.kf.covariance()
     }
 
+    /// Adds `spread` (symmetric, positive semi-definite: e.g. the outer product of
+    /// an innovation) to the 3 x 3 covariance block of the states `block..block + 3`
+    /// ([`POS`], [`VEL`], ...): the filter admits an error it did not account for (a
+    /// re-acquisition after a run of rejected fixes). The error state is unchanged.
+    ///
+    /// # Errors
+    /// [`EstimatorError`] naming the spread for a non-finite entry or a `block`
+    /// beyond the last 3 x 3 block, or naming `P` when the result is not a valid
+    /// covariance; the filter is unchanged on error.
+    pub fn widen_covariance_block(
+        &mut self,
+        block: usize,
+        spread: &Matrix3<f64>,
+    ) -> Result<(), EstimatorError> {
+        let t = self.kf.time();
+        check_finite_at("covariance spread", spread.as_slice(), t)?;
+        if block > N_ERROR_STATES - 3 {
+            return Err(EstimatorError::OutOfRange {
+                what: "covariance block".into(),
+                value: block as f64,
+                expected: "0 ..= 12 (a block of 3 of the 15 states)",
+            });
+        }
+        let mut p = *self.kf.covariance();
+        let mut v = p.fixed_view_mut::<3, 3>(block, block);
+        v += spread;
+        self.kf
+            .set_estimate(Gaussian::new_unchecked(*self.kf.state(), p))
+    }
+
     /// The filter time, s.
     pub fn time(&self) -> f64 {
         self.kf.time()
@@ -371,5 +401,49 @@ mod tests {
         f.predict(&phi, &q, 0.1).unwrap();
         assert!(f.predict(&phi, &q, 0.05).is_err());
         assert!(ErrorStateFilter::new(&ErrorCovariance::zeros(), 0.0).is_err());
+    }
+
+    /// Widening a block adds the spread there only and keeps the error state; a
+    /// fix the gate rejected passes after the position block is widened by the
+    /// outer product of its innovation (NIS `a / (1 + a) < 1`); bad spreads and
+    /// blocks are refused with the filter unchanged.
+    #[test]
+    fn widening_a_block_lets_a_rejected_fix_pass() {
+        let mut f = ErrorStateFilter::new(
+            &ErrorStateFilter::diagonal_covariance([1.0, 0.1, 0.01, 0.01, 0.001]),
+            0.0,
+        )
+        .unwrap();
+        let ins = Vector3::new(0.0, 0.0, 0.0);
+        let fix = Vector3::new(40.0, -30.0, 0.0);
+        let r = Matrix3::identity();
+        let gate = GateThreshold::from_chi_square_probability(0.999, 3).unwrap();
+        let g = f.update_position(&ins, &fix, &r, Some(gate)).unwrap();
+        assert!(!g.is_accepted());
+        let before = f.clone();
+        let nu = ins - fix;
+        f.widen_covariance_block(POS, &(nu * nu.transpose()))
+            .unwrap();
+        let p = f.covariance();
+        assert_abs_diff_eq!(p[(0, 0)], 1.0 + 1600.0, epsilon = 1e-9);
+        assert_abs_diff_eq!(p[(0, 1)], -1200.0, epsilon = 1e-9);
+        assert_abs_diff_eq!(p[(3, 3)], before.covariance()[(3, 3)], epsilon = 0.0);
+        let g = f.update_position(&ins, &fix, &r, Some(gate)).unwrap();
+        assert!(g.is_accepted() && g.nis() < 1.0, "{}", g.nis());
+        let dx = f.take_correction().unwrap();
+        // estimated minus true: the INS is ~(-40, 30) off
+        assert!(
+            (dx[0] + 40.0).abs() < 1.0 && (dx[1] - 30.0).abs() < 1.0,
+            "{dx}"
+        );
+        let kept = f.clone();
+        let nan = Matrix3::from_element(f64::NAN);
+        assert!(f.widen_covariance_block(POS, &nan).is_err());
+        assert!(f.widen_covariance_block(13, &Matrix3::identity()).is_err());
+        assert!(
+            f.widen_covariance_block(VEL, &(-Matrix3::identity() * 10.0))
+                .is_err()
+        );
+        assert_eq!(f, kept);
     }
 }

@@ -20,7 +20,10 @@
 //! - [`figures`]: the figures every replay draws (estimate vs truth, error with 3σ,
 //!   innovations with ±3√S, NIS against a consistent filter's interval);
 //! - [`data_dir`]: where a replay's data folder is;
-//! - [`method_keys`]: the values each `[[methods]]` key of a replay accepts.
+//! - [`method_keys`]: the values each `[[methods]]` key of a replay accepts;
+//! - [`scene_mesh`]: a world mesh as the scene page draws it;
+//! - [`world_file`]: a user's OBJ / STL world read with its checks (the `urban`
+//!   experiment's world files and the `gnss-ins` replay's `--world`).
 //!
 //! [`own_log_replays`] lists the own-log replays as jobs ([`range_beacon::RangeBeacon`],
 //! [`ins_dvl::InsDvl`], [`gnss_ins::GnssIns`]) for the front ends, beside the paper experiments' registry.
@@ -34,6 +37,8 @@ pub mod method_keys;
 pub mod own_log;
 pub mod plaza;
 pub mod range_beacon;
+pub mod scene_mesh;
+pub mod world_file;
 
 use fathom_sim::experiment::DynExperiment;
 

@@ -14,8 +14,12 @@ pub const RANGE_BEACON: &[(&str, &[&str])] = &[
 /// the 15-state error-state filter, `ESKF` in the `vkf` experiment).
 pub const INS_DVL: &[(&str, &[&str])] = &[("filter", &["pins", "ins-dvl", "vkf", "eskf"])];
 
-/// `(key, accepted values)` of a `[[methods]]` entry of a `gnss-ins` replay.
-pub const GNSS_INS: &[(&str, &[&str])] = &[("filter", &["ins", "gps-ins-12", "gps-ins-15"])];
+/// `(key, accepted values)` of a `[[methods]]` entry of a `gnss-ins` replay
+/// (`grekf`, `mgpmf`: with a world, `--world`).
+pub const GNSS_INS: &[(&str, &[&str])] = &[(
+    "filter",
+    &["ins", "gps-ins-12", "gps-ins-15", "grekf", "mgpmf"],
+)];
 
 /// The keys and values of the replay named `kind` (`range-beacon`, `ins-dvl`,
 /// `gnss-ins`); none for another name.
@@ -71,11 +75,18 @@ mod tests {
                 assert_eq!(parsed.is_ok(), *v != "bogus", "{key} = {v}: {parsed:?}");
             }
         }
+        // the map-aided filters need a world: accepted with one, refused without
+        let with_world =
+            GNSS_INS_PRESET.replace("[initial]", "[world]\nfile = \"w.obj\"\n\n[initial]");
         for (key, values) in GNSS_INS {
             for v in values.iter().chain(&["bogus"]) {
-                let text = with_method(GNSS_INS_PRESET, &format!("{key} = \"{v}\""));
+                let text = with_method(&with_world, &format!("{key} = \"{v}\""));
                 let parsed = crate::gnss_ins::parse_settings(&text, "t.toml");
                 assert_eq!(parsed.is_ok(), *v != "bogus", "{key} = {v}: {parsed:?}");
+                let text = with_method(GNSS_INS_PRESET, &format!("{key} = \"{v}\""));
+                let map_aided = ["grekf", "mgpmf"].contains(v);
+                let parsed = crate::gnss_ins::parse_settings(&text, "t.toml");
+                assert_eq!(parsed.is_ok(), *v != "bogus" && !map_aided, "{key} = {v}");
             }
         }
         assert_eq!(method_keys("ins-dvl"), INS_DVL);

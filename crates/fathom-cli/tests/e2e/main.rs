@@ -12,6 +12,7 @@ mod campaign;
 mod cli;
 mod default_outputs;
 mod determinism;
+mod drone_world;
 mod every_key;
 mod fusion;
 mod fuzz_corpus;

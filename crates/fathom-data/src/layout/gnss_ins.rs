@@ -8,7 +8,7 @@
 //! | `gnss.csv` | `time[s], latitude[rad], longitude[rad], altitude[m], h_acc[m], v_acc[m], vel_north[m/s], vel_east, vel_down, speed_acc[m/s], fix_type, satellites` | receiver fixes and accuracy (required) |
 //! | `baro.csv` | `time[s], altitude[m]` | barometric altitude (optional) |
 //! | `mag.csv` | `time[s], mag_x[T], mag_y[T], mag_z[T]` | magnetometer, body axes (optional) |
-//! | `range.csv` | `time[s], distance[m], orientation` | distance sensor, PX4 orientation code (optional) |
+//! | `range.csv` | `time[s], distance[m], orientation, (beam_x, beam_y, beam_z)` | distance sensors or scan beams: PX4 orientation code, or the beam's direction in body axes (optional) |
 //! | `reference.csv` | `time[s], latitude[rad], longitude[rad], altitude[m], vel_north[m/s], vel_east, vel_down, roll[rad], pitch[rad], heading[rad]` | the autopilot's estimate (optional) |
 //! | `truth.csv` | `time[s], latitude[rad], longitude[rad], altitude[m], vel_north[m/s], vel_east, vel_down` | ground truth (optional) |
 
@@ -50,6 +50,42 @@ pub struct GnssRow {
     pub satellites: u32,
 }
 
+/// One range reading: a distance sensor's sample or one beam of a scan.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RangeRow {
+    /// Time, s.
+    pub time: f64,
+    /// Measured distance, m.
+    pub distance: f64,
+    /// PX4's orientation code (`distance_sensor.orientation`: 0 forward, 2 right,
+    /// 4 / 12 backward, 6 left, 24 upward, 25 downward, 100 custom).
+    pub orientation: u32,
+    /// The beam's direction in body axes (forward-right-down) when the file gives it
+    /// (`beam_x, beam_y, beam_z`; need not be unit).
+    pub beam_in_body: Option<[f64; 3]>,
+}
+
+impl RangeRow {
+    /// The beam's direction in body axes: the file's `beam_*` columns, else the
+    /// direction of the orientation code (`None` for a code without a fixed
+    /// direction, e.g. 100 custom, or a zero beam).
+    pub fn dir_in_body(&self) -> Option<[f64; 3]> {
+        if let Some(b) = self.beam_in_body {
+            let n = (b[0] * b[0] + b[1] * b[1] + b[2] * b[2]).sqrt();
+            return (n > 0.0 && n.is_finite()).then_some(b);
+        }
+        match self.orientation {
+            0 => Some([1.0, 0.0, 0.0]),
+            2 => Some([0.0, 1.0, 0.0]),
+            4 | 12 => Some([-1.0, 0.0, 0.0]),
+            6 => Some([0.0, -1.0, 0.0]),
+            24 => Some([0.0, 0.0, -1.0]),
+            25 => Some([0.0, 0.0, 1.0]),
+            _ => None,
+        }
+    }
+}
+
 /// A pose of a track (the autopilot's estimate or the truth).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct TrackRow {
@@ -76,8 +112,8 @@ pub struct GnssInsLog {
     pub baro: Option<Vec<(f64, f64)>>,
     /// Magnetometer `(time, [x, y, z] T)`.
     pub mag: Option<Vec<(f64, [f64; 3])>>,
-    /// Distance sensor `(time, m, orientation code)`.
-    pub range: Option<Vec<(f64, f64, u32)>>,
+    /// Distance sensors and scan beams.
+    pub range: Option<Vec<RangeRow>>,
     /// The autopilot's estimate.
     pub reference: Option<Vec<TrackRow>>,
     /// Ground truth.
@@ -94,6 +130,27 @@ fn track(t: &Table, attitude: bool) -> Vec<TrackRow> {
             euler: attitude.then(|| t.triple(k, ["roll", "pitch", "heading"])),
         })
         .collect()
+}
+
+/// The rows of `range.csv`: the beam columns all three or none.
+fn range_rows(t: &Table, path: std::path::PathBuf) -> Result<Vec<RangeRow>, LogError> {
+    let beams = ["beam_x", "beam_y", "beam_z"];
+    let present: Vec<bool> = beams.iter().map(|b| t.has(b)).collect();
+    if present.iter().any(|p| *p) && !present.iter().all(|p| *p) {
+        return Err(LogError::Inconsistent {
+            path,
+            reason: "the columns beam_x, beam_y, beam_z go together (give all three or none)"
+                .into(),
+        });
+    }
+    Ok((0..t.len())
+        .map(|k| RangeRow {
+            time: t.column("time")[k],
+            distance: t.column("distance")[k],
+            orientation: count(t.column("orientation")[k]),
+            beam_in_body: present[0].then(|| t.triple(k, beams)),
+        })
+        .collect())
 }
 
 fn count(x: f64) -> u32 {
@@ -151,17 +208,10 @@ impl GnssInsLog {
                     })
                     .collect()
             }),
-            range: set.table(&RANGE)?.map(|t| {
-                (0..t.len())
-                    .map(|k| {
-                        (
-                            t.column("time")[k],
-                            t.column("distance")[k],
-                            count(t.column("orientation")[k]),
-                        )
-                    })
-                    .collect()
-            }),
+            range: set
+                .table(&RANGE)?
+                .map(|t| range_rows(&t, set.path(RANGE.file)))
+                .transpose()?,
             reference: set.table(&REFERENCE)?.map(|t| track(&t, true)),
             truth: set.table(&TRUTH)?.map(|t| track(&t, false)),
         })
@@ -246,11 +296,26 @@ impl GnssInsLog {
             ));
         }
         if let Some(r) = &self.range {
+            let beams = r.iter().any(|b| b.beam_in_body.is_some());
+            let mut header = vec!["time[s]", "distance[m]", "orientation"];
+            if beams {
+                header.extend(["beam_x", "beam_y", "beam_z"]);
+            }
             out.push((
                 RANGE.file,
                 csv_text(
-                    &["time[s]", "distance[m]", "orientation"],
-                    r.iter().map(|(t, d, o)| vec![*t, *d, f64::from(*o)]),
+                    &header,
+                    r.iter().map(|b| {
+                        let mut row = vec![b.time, b.distance, f64::from(b.orientation)];
+                        if beams {
+                            row.extend(
+                                b.beam_in_body
+                                    .or_else(|| b.dir_in_body())
+                                    .unwrap_or([0.0; 3]),
+                            );
+                        }
+                        row
+                    }),
                 ),
             ));
         }
@@ -342,5 +407,50 @@ mod tests {
         assert!(e(&[("imu.csv", one), ("gnss.csv", GNSS_CSV)]).contains("at least two rows"));
         let neg_acc = GNSS_CSV.replace(",0.5,0.8,", ",-0.5,0.8,");
         assert!(e(&[("imu.csv", IMU_CSV), ("gnss.csv", &neg_acc)]).contains("`h_acc[m]`"));
+    }
+
+    /// Scan beams: several rows per stamp, the beam columns all three or none, the
+    /// orientation codes' directions, and the round trip.
+    #[test]
+    fn range_beams_parse_and_the_beam_columns_go_together() {
+        let ranges = "time[s],distance[m],orientation,beam_x,beam_y,beam_z\n1,5,100,1,0,0\n1,7,100,0,0.6,0.8\n1.2,6,100,1,0,0\n";
+        let files = [
+            ("imu.csv", IMU_CSV),
+            ("gnss.csv", GNSS_CSV),
+            ("range.csv", ranges),
+        ];
+        let log = GnssInsLog::parse(&set(&files)).unwrap();
+        let r = log.range.as_ref().unwrap();
+        assert_eq!(r.len(), 3);
+        assert_eq!(r[1].dir_in_body(), Some([0.0, 0.6, 0.8]));
+        let files2 = log.to_files();
+        let back: Vec<(&'static str, &str)> =
+            files2.iter().map(|(n, t)| (*n, t.as_str())).collect();
+        assert_eq!(GnssInsLog::parse(&set(&back)).unwrap(), log);
+        let two = "time[s],distance[m],orientation,beam_x,beam_y\n1,5,100,1,0\n";
+        let files = [
+            ("imu.csv", IMU_CSV),
+            ("gnss.csv", GNSS_CSV),
+            ("range.csv", two),
+        ];
+        let e = GnssInsLog::parse(&set(&files)).unwrap_err().to_string();
+        assert!(e.contains("range.csv") && e.contains("go together"), "{e}");
+        let down = RangeRow {
+            time: 0.0,
+            distance: 1.0,
+            orientation: 25,
+            beam_in_body: None,
+        };
+        assert_eq!(down.dir_in_body(), Some([0.0, 0.0, 1.0]));
+        let custom = RangeRow {
+            orientation: 100,
+            ..down
+        };
+        assert_eq!(custom.dir_in_body(), None);
+        let zero = RangeRow {
+            beam_in_body: Some([0.0; 3]),
+            ..down
+        };
+        assert_eq!(zero.dir_in_body(), None);
     }
 }

@@ -265,15 +265,22 @@ pub mod gnss_ins {
         ],
     );
 
-    /// `range.csv`: a distance sensor (PX4 `orientation` code: 25 = downward).
-    pub const RANGE: FileSpec = FileSpec::timed(
-        "range.csv",
-        &[
+    /// `range.csv`: distance sensors (PX4 `orientation` code: 25 = downward), or
+    /// beams of any direction (`beam_x, beam_y, beam_z` in body axes); several beams
+    /// may share a stamp (a scan).
+    pub const RANGE: FileSpec = FileSpec {
+        file: "range.csv",
+        columns: &[
             TIME,
             C::required("distance", Length, Check::NonNegative),
             C::required("orientation", Count, Check::Integer),
+            C::optional("beam_x", Count, Check::Any),
+            C::optional("beam_y", Count, Check::Any),
+            C::optional("beam_z", Count, Check::Any),
         ],
-    );
+        groups: &[],
+        time: TimeOrder::NonDecreasing,
+    };
 
     /// `reference.csv`: the autopilot's own estimate (PX4's EKF2), a reference track.
     pub const REFERENCE: FileSpec = FileSpec::timed(

@@ -23,7 +23,7 @@ use super::topics::{
     BARO, EKF_ATTITUDE, EKF_POSITION, GPS, IMU, MAG, RANGE, SENSOR_GPS, TRUTH_POSITION,
     TopicSeries, UlogTopics,
 };
-use crate::layout::gnss_ins::{GnssInsLog, GnssRow, ImuRow, TrackRow};
+use crate::layout::gnss_ins::{GnssInsLog, GnssRow, ImuRow, RangeRow, TrackRow};
 use std::path::Path;
 
 /// The converted log and what was dropped.
@@ -236,7 +236,12 @@ pub fn gnss_ins_from_ulog(topics: &UlogTopics, path: &Path) -> Result<Conversion
     });
     let range = (!s[RANGE].is_empty()).then(|| {
         let (r, n) = rows(&s[RANGE], |t, v| {
-            (finite(v) && v[0] >= 0.0).then_some((t, v[0], v[1] as u32))
+            (finite(v) && v[0] >= 0.0).then_some(RangeRow {
+                time: t,
+                distance: v[0],
+                orientation: v[1] as u32,
+                beam_in_body: None,
+            })
         });
         note("distance_sensor", n);
         r

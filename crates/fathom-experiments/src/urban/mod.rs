@@ -23,6 +23,7 @@
 //! | [`record`] | records, kept values, the batch fold |
 //! | `analysis`, [`claims`], `figures`, `report`, `paper` | rows, claims, SVG, notes, the printed numbers |
 //! | [`scene_page`] | run 0 as the 3D scene page (`scene.html`) |
+//! | [`export_log`] | one flight as a `gnss-ins` log with its world as OBJ (the replay's tests) |
 
 mod analysis;
 pub mod check;
@@ -31,6 +32,7 @@ mod check_sensors;
 pub mod claims;
 pub mod closed_loop;
 mod cost;
+pub mod export_log;
 mod figures;
 pub mod method;
 pub mod nav;

@@ -3,12 +3,8 @@
 //! estimated paths with each method's mode, the scans and the lines of sight handed
 //! to [`fathom_report::scene`] ([`page`]).
 
-use fathom_core::Material;
-use fathom_map::TriMesh;
 use fathom_report::scene::decimate::{MAX_HITS, MAX_SCANS, MAX_SKY, keep};
-use fathom_report::scene::{
-    MaterialStyle, MethodTrack, Scan, Scene, SceneMesh, ScenePage, SkyEpoch,
-};
+use fathom_report::scene::{MethodTrack, Scan, Scene, ScenePage, SkyEpoch};
 
 use super::method::Method;
 use super::record::{ScanSnapshot, SceneDetail, SkySnapshot};
@@ -77,51 +73,7 @@ pub fn sky(
         .collect()
 }
 
-/// How a material is drawn: opaque grey, glass light blue and translucent, other
-/// materials by their number.
-pub fn style(m: Material) -> MaterialStyle {
-    let (name, color, opacity) = match m {
-        Material::Opaque => ("opaque".to_string(), 0x9da3ab, 1.0),
-        Material::Glass => ("glass".to_string(), 0x7cc4ff, 0.35),
-        Material::Other(id) => {
-            let palette = [0xb5835a, 0x8c9a6b, 0xa97fb0, 0xc9b458, 0x6f8fa8];
-            (
-                format!("material {id}"),
-                palette[usize::from(id) % palette.len()],
-                1.0,
-            )
-        }
-    };
-    MaterialStyle {
-        name,
-        color,
-        opacity,
-    }
-}
-
-/// The mesh in the page's form: vertices as `f32`, one style per material present
-/// (materials past the 256th share the last style).
-pub fn mesh_of(mesh: &TriMesh) -> SceneMesh {
-    let mut present: Vec<Material> = mesh.materials().to_vec();
-    present.sort();
-    present.dedup();
-    present.truncate(256);
-    let index = |m: &Material| {
-        present
-            .binary_search(m)
-            .unwrap_or(present.len().saturating_sub(1)) as u8
-    };
-    SceneMesh {
-        vertices: mesh
-            .vertices()
-            .iter()
-            .map(|v| [v.x as f32, v.y as f32, v.z as f32])
-            .collect(),
-        triangles: mesh.triangles().to_vec(),
-        material: mesh.materials().iter().map(index).collect(),
-        styles: present.into_iter().map(style).collect(),
-    }
-}
+pub use fathom_replay::scene_mesh::{mesh_of, style};
 
 /// A point in the page's `f32`.
 pub fn f32x3(p: &[f64; 3]) -> [f32; 3] {
@@ -249,28 +201,6 @@ pub fn track(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use fathom_map::MeshBuilder;
-    use nalgebra::Vector3;
-
-    /// Each material present gets one style (glass translucent, opaque not), every
-    /// triangle points at its own material's style.
-    #[test]
-    fn mesh_styles_follow_the_materials() {
-        let mut b = MeshBuilder::new();
-        let v = |x: f64, y: f64| Vector3::new(x, y, 0.0);
-        b.triangle_at(v(0.0, 0.0), v(1.0, 0.0), v(0.0, 1.0), Material::Glass);
-        b.triangle_at(v(2.0, 0.0), v(3.0, 0.0), v(2.0, 1.0), Material::Opaque);
-        b.triangle_at(v(4.0, 0.0), v(5.0, 0.0), v(4.0, 1.0), Material::Glass);
-        let (mesh, _) = b.build().unwrap();
-        let m = mesh_of(&mesh);
-        assert_eq!(m.styles.len(), 2);
-        for (t, mat) in mesh.materials().iter().enumerate() {
-            let st = &m.styles[usize::from(m.material[t])];
-            assert_eq!(st.name, mat.to_string());
-            assert_eq!(st.opacity < 1.0, mat.is_glass());
-        }
-        assert_eq!(m.vertices.len(), mesh.vertices().len());
-    }
 
     /// A method's mode is map-aided only for a switching method; a diverged estimate
     /// is drawn at the truth.

@@ -7,11 +7,9 @@
 //! lies outside the mesh's plan bounds (or below it), or when a leg between two
 //! waypoints passes through the mesh.
 
-use std::path::Path as FsPath;
-
 use fathom_core::RayCaster;
-use fathom_core::echo::{echo_file, echo_path};
-use fathom_map::{BvhCaster, TriMesh, obj::read_obj, stl::read_stl};
+use fathom_core::echo::echo_file;
+use fathom_map::{BvhCaster, TriMesh};
 use fathom_sensors::gnss::{GnssParams, GnssReceiver};
 use fathom_traj::quadrotor::{Path, PathParams, Waypoint};
 use nalgebra::Vector3;
@@ -137,60 +135,7 @@ fn read_world(
     settings: &fathom_map::ImportSettings,
     env: &Environment,
 ) -> Result<(TriMesh, String), SimError> {
-    let bad = |reason: String| SimError::invalid(&checked.file, key, reason);
-    let full = if FsPath::new(path).is_absolute() {
-        FsPath::new(path).to_path_buf()
-    } else {
-        env.base_dir.join(path)
-    };
-    let ext = full
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    let shown = echo_file(path);
-    // Only a regular file is opened: opening a FIFO would block, a device would be
-    // read to the import limit.
-    let meta = std::fs::metadata(&full)
-        .map_err(|e| bad(format!("cannot read `{}`: {e}", echo_path(&full))))?;
-    if !meta.is_file() {
-        return Err(bad(format!("`{shown}` is not a regular file")));
-    }
-    if meta.len() > settings.max_bytes {
-        return Err(bad(format!(
-            "`{shown}`: {}",
-            fathom_map::MapError::TooLarge {
-                bytes: meta.len(),
-                limit: settings.max_bytes
-            }
-        )));
-    }
-    let file = std::fs::File::open(&full)
-        .map_err(|e| bad(format!("cannot read `{}`: {e}", echo_path(&full))))?;
-    let parsed = match ext.as_str() {
-        "obj" => read_obj(file, settings),
-        "stl" => read_stl(file, settings),
-        _ => {
-            return Err(bad(format!(
-                "`{shown}`: the world file must end in .obj or .stl"
-            )));
-        }
-    };
-    let (mesh, report) = parsed.map_err(|e| bad(e.in_file(path).to_string()))?;
-    if mesh.is_empty() {
-        return Err(bad(format!(
-            "`{shown}` has no faces ({} read, {} degenerate or duplicate): a world needs triangles",
-            report.faces_read,
-            report.mesh.degenerate_skipped + report.mesh.duplicate_skipped
-        )));
-    }
-    let source = format!(
-        "file `{path}`: {} triangles ({} faces read, {} degenerate and {} duplicate skipped)",
-        mesh.len(),
-        report.faces_read,
-        report.mesh.degenerate_skipped,
-        report.mesh.duplicate_skipped
-    );
-    Ok((mesh, source))
+    fathom_replay::world_file::read_mesh_file(&checked.file, key, path, &env.base_dir, settings)
 }
 
 fn prepare_scene(

@@ -1,13 +1,15 @@
 //! The GNSS / INS replay's `summary.json` rows and checks and its CSV files:
 //! `estimates.csv` (EKF2, the truth and every method's position at the recording
-//! instants) and `gnss_updates.csv` (every filter's GNSS updates).
+//! instants) and `gnss_updates.csv` (every filter's GNSS updates, `reset` 1 for a
+//! re-acquisition).
 //!
 //! Rows per method: `rms_h_vs_ekf2`, `rms_3d_vs_ekf2`, `max_h_vs_ekf2` (agreement
 //! with EKF2, m); with truth `rmse_h`, `rmse_3d` (m) and `nees_pos` (mean position
 //! NEES per dof, filters); per outage window `k` `outage<k>_drift_h_vs_ekf2` (the
 //! horizontal distance from EKF2 at the last instant of the window) and
-//! `outage<k>_max_h_vs_ekf2`; the GNSS updates `gnss_accepted`, `gnss_rejected` and
-//! their NIS (`nis_gnss_*`). EKF2 gets the rows `rmse_h`, `rmse_3d` with truth. With
+//! `outage<k>_max_h_vs_ekf2`; the GNSS updates `gnss_accepted`, `gnss_rejected`,
+//! `gnss_resets` (re-acquisitions after a run of rejected fixes) and their NIS (`nis_gnss_*`); the map-aided methods `map_updates`, `map_left_out`,
+//! `map_failed` and `mode_switches`. EKF2 gets the rows `rmse_h`, `rmse_3d` with truth. With
 //! truth, the check `<method>_rmse_h_within_1.5x_ekf2` compares each filter with EKF2.
 
 use fathom_report::output::{Claim, CsvCell, Row};
@@ -34,6 +36,11 @@ fn declare_units(r: &GnssInsReplay, out: &mut Analysis) {
         ("nees_pos", "1"),
         ("gnss_accepted", "count"),
         ("gnss_rejected", "count"),
+        ("gnss_resets", "count"),
+        ("map_updates", "count"),
+        ("map_left_out", "count"),
+        ("map_failed", "count"),
+        ("mode_switches", "count"),
     ] {
         out.unit(metric, unit);
     }
@@ -96,6 +103,12 @@ pub(super) fn rows(r: &GnssInsReplay, out: &mut Analysis) {
                 ));
             }
         }
+        if let Some(c) = &m.trace.map {
+            out.row(Row::new(name, "map_updates", c.map_updates as f64));
+            out.row(Row::new(name, "map_left_out", c.map_left_out as f64));
+            out.row(Row::new(name, "map_failed", c.map_failed as f64));
+            out.row(Row::new(name, "mode_switches", c.switches as f64));
+        }
         if m.trace.method.filter == GnssInsFilter::Ins {
             continue;
         }
@@ -103,6 +116,8 @@ pub(super) fn rows(r: &GnssInsReplay, out: &mut Analysis) {
         let accepted = u.iter().filter(|x| x.accepted).count();
         out.row(Row::new(name, "gnss_accepted", accepted as f64));
         out.row(Row::new(name, "gnss_rejected", (u.len() - accepted) as f64));
+        let resets = u.iter().filter(|x| x.reset).count();
+        out.row(Row::new(name, "gnss_resets", resets as f64));
         let nis: Vec<f64> = u
             .iter()
             .filter(|x| x.nis.is_finite())
@@ -160,12 +175,13 @@ pub(super) fn csv_files(r: &GnssInsReplay, out: &mut Analysis) -> Result<(), Sim
                 CsvCell::Num(u.nis),
                 CsvCell::Num(u.dof as f64),
                 CsvCell::Num(f64::from(u8::from(u.accepted))),
+                CsvCell::Num(f64::from(u8::from(u.reset))),
             ]);
         }
     }
     out.csv_records(
         "gnss_updates.csv",
-        &["method", "time[s]", "nis", "dof", "accepted"],
+        &["method", "time[s]", "nis", "dof", "accepted", "reset"],
         &records,
     )?;
     Ok(())

@@ -10,8 +10,10 @@ use rand_chacha::ChaCha8Rng;
 
 use super::{GnssInsReplay, GnssInsSettings, GnssInsToml, analysis, figures, replay, report};
 use crate::own_log::{self, GNSS_INS_PRESET, SEED_DOC, log_error};
+use crate::world_file::read_mesh_file;
 use fathom_data::layout::gnss_ins::GnssInsLog;
 use fathom_data::layout::{FileSet, LogKind};
+use fathom_map::TriMesh;
 use fathom_sim::SimError;
 use fathom_sim::cost::CostTerm;
 use fathom_sim::experiment::{Analysis, Batch, Environment, Experiment};
@@ -20,6 +22,10 @@ use fathom_sim::experiment::{Analysis, Batch, Environment, Experiment};
 #[derive(Debug)]
 pub struct Prepared {
     settings: GnssInsSettings,
+    /// The world mesh (in its file's frame) and what was read, with `[world]`.
+    world: Option<(TriMesh, String)>,
+    /// Whether a replay with a world writes `scene.html` (not with `--no-scene`).
+    scene_page: bool,
     /// The log's description (its manifest's, or the ULog conversion's: the same
     /// text for the same flight).
     about: String,
@@ -76,8 +82,40 @@ impl Experiment for GnssIns {
         let path = own_log::log_dir(env, &settings.data_dir);
         let (log, about) = read_log(&path)?;
         super::run::start_row(&log)?;
+        let world = match &settings.world {
+            None => None,
+            Some(w) => {
+                let beams = log
+                    .range
+                    .as_deref()
+                    .unwrap_or(&[])
+                    .iter()
+                    .filter(|r| r.dir_in_body().is_some())
+                    .count();
+                if beams == 0 {
+                    return Err(SimError::invalid_argument(
+                        format!("world `{}`", fathom_core::echo::echo_file(&w.file)),
+                        format!(
+                            "the log `{}` has no range rows with a beam direction \
+                             (`range.csv`): the map-aided filters need range beams; replay \
+                             without --world",
+                            fathom_core::echo::echo_path(&path)
+                        ),
+                    ));
+                }
+                Some(read_mesh_file(
+                    &settings.file,
+                    "world.file",
+                    &w.file,
+                    &env.base_dir,
+                    &w.import,
+                )?)
+            }
+        };
         Ok(Prepared {
             settings,
+            world,
+            scene_page: env.scene_page,
             about,
             log,
         })
@@ -94,7 +132,9 @@ impl Experiment for GnssIns {
         _index: usize,
         _rng: &mut ChaCha8Rng,
     ) -> Result<GnssInsReplay, SimError> {
-        replay(&p.log, &p.settings)
+        let mut r = replay(&p.log, &p.settings, p.world.as_ref().map(|w| &w.0))?;
+        r.world = p.world.as_ref().map(|w| w.1.clone());
+        Ok(r)
     }
 
     fn fold(
@@ -121,6 +161,10 @@ impl Experiment for GnssIns {
         analysis::rows(&r, out);
         analysis::csv_files(&r, out)?;
         figures::write(&r, out)?;
+        if let (Some((mesh, _)), true) = (&p.world, p.scene_page) {
+            let title = format!("gnss-ins replay with the world {}", p.settings.world_file());
+            out.page("scene.html", super::scene::page(&r, mesh, &title)?)?;
+        }
         out.report(&report::notes(&r, &p.about));
         Ok(())
     }

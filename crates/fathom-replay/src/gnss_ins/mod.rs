@@ -4,7 +4,9 @@
 //! the strapdown INS alone, the 12-state GPS/INS filter of the `urban` experiment
 //! (`fathom_estimators::map_aided::Ins12Filter`) and its 15-state extension with a
 //! gyro bias (`fathom_estimators::error_state::ErrorStateFilter` with
-//! `map_aided::error_model::transition_with_gyro_bias`).
+//! `map_aided::error_model::transition_with_gyro_bias`); with a world mesh
+//! (`--world`) and range beams in the log, the map-aided filters of the `urban`
+//! experiment (GREKF, MGPMF) switching from GPS/INS while GNSS is away.
 //!
 //! References: the autopilot's estimate (`reference.csv`, PX4's EKF2) is always there
 //! and every method is compared with it at its rows ("agreement with EKF2", not an
@@ -20,17 +22,21 @@
 mod analysis;
 mod figures;
 mod job;
+mod map_settings;
 mod report;
 pub mod run;
+mod scene;
 mod settings;
 
 pub use job::{GnssIns, Prepared, read_log};
 pub use settings::{
     FILTERS, GnssAidToml, GnssInsFilter, GnssInsImuToml, GnssInsInitialToml, GnssInsMethod,
-    GnssInsMethodToml, GnssInsSettings, GnssInsToml, OutageToml, default_methods, parse_settings,
+    GnssInsMethodToml, GnssInsSettings, GnssInsToml, MapAidedSettings, MapAidedToml, OutageToml,
+    WorldSettings, WorldToml, default_methods, parse_settings,
 };
 
 use fathom_data::layout::gnss_ins::{GnssInsLog, TrackRow};
+use fathom_map::TriMesh;
 use fathom_sim::SimError;
 use nalgebra::{Matrix3, Vector3};
 
@@ -45,6 +51,23 @@ pub struct FixUpdate {
     pub dof: usize,
     /// Whether it passed the gate and was applied.
     pub accepted: bool,
+    /// Whether it re-acquired the position after a run of rejected fixes (the
+    /// covariance widened by the error the fix showed, then the fix applied).
+    #[serde(default)]
+    pub reset: bool,
+}
+
+/// What a map-aided method did.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+pub struct MapCounts {
+    /// Map-aided updates applied (a GREKF update counts when it used a beam).
+    pub map_updates: usize,
+    /// GREKF updates in which every beam was left out (gated, grazing, no hit).
+    pub map_left_out: usize,
+    /// Map-aided updates that failed (no predicted hit from the pose, bad geometry).
+    pub map_failed: usize,
+    /// Mode switches (GPS/INS to map-aided and back).
+    pub switches: usize,
 }
 
 /// What one method produced at the recording instants.
@@ -60,6 +83,11 @@ pub struct MethodTrace {
     pub cov_pos: Option<Vec<[f64; 6]>>,
     /// Every GNSS update.
     pub updates: Vec<FixUpdate>,
+    /// The map-aided methods' counters.
+    pub map: Option<MapCounts>,
+    /// The map-aided methods' mode at the instants (true: map-aided).
+    #[serde(default)]
+    pub map_mode: Option<Vec<bool>>,
 }
 
 impl MethodTrace {
@@ -70,6 +98,8 @@ impl MethodTrace {
             vel_in_nav: Vec::new(),
             cov_pos: None,
             updates: Vec::new(),
+            map: None,
+            map_mode: None,
         }
     }
 
@@ -179,6 +209,14 @@ pub struct GnssInsReplay {
     pub fixes: Vec<FixInfo>,
     /// Outage windows, s from the start.
     pub outages: Vec<[f64; 2]>,
+    /// The world the map-aided methods used (what was read), if any.
+    pub world: Option<String>,
+    /// Where the world's origin lies in the local frame (NED, m), with a world.
+    #[serde(default)]
+    pub world_shift: Option<[f64; 3]>,
+    /// `gnss.reacquire_after_rejections` (0: no re-acquisition).
+    #[serde(default)]
+    pub reacquire_after: usize,
     /// Rows read: IMU, GNSS, baro, magnetometer, range, reference, truth.
     pub rows: [usize; 7],
 }
@@ -219,14 +257,20 @@ fn nees(trace: &MethodTrace, truth: &[[f64; 3]]) -> Option<f64> {
     (n > 0).then(|| sum / (3.0 * n as f64))
 }
 
-/// Replays every method of `settings` on `log`.
+/// Replays every method of `settings` on `log` (`world`: the mesh of the settings'
+/// `[world]`, for the map-aided methods).
 ///
 /// # Errors
 /// [`SimError::InvalidArgument`] for a log without `reference.csv`, without EKF2
-/// rows inside the IMU data, or with a truth that does not cover the instants;
-/// [`SimError::Model`] naming the method and time of a failing step.
-pub fn replay(log: &GnssInsLog, settings: &GnssInsSettings) -> Result<GnssInsReplay, SimError> {
-    let pass = run::run(log, settings)?;
+/// rows inside the IMU data, or with a truth that does not cover the instants, or a
+/// map-aided method without a world; [`SimError::Model`] naming the method and time
+/// of a failing step.
+pub fn replay(
+    log: &GnssInsLog,
+    settings: &GnssInsSettings,
+    world: Option<&TriMesh>,
+) -> Result<GnssInsReplay, SimError> {
+    let pass = run::run(log, settings, world)?;
     let (frame, t0) = (pass.frame, pass.t0);
     let fixes: Vec<FixInfo> = log
         .gnss
@@ -295,6 +339,9 @@ pub fn replay(log: &GnssInsLog, settings: &GnssInsSettings) -> Result<GnssInsRep
         methods,
         fixes,
         outages: settings.outages.clone(),
+        world: None,
+        world_shift: pass.world_shift,
+        reacquire_after: settings.reacquire_after,
         rows: [
             log.imu.len(),
             log.gnss.len(),

@@ -18,6 +18,14 @@ fn describe(f: GnssInsFilter) -> &'static str {
         GnssInsFilter::Ekf15 => {
             "GPS/INS, the 15-state filter [dp, dv, psi, b_a, b_g] (gyro bias), closed loop"
         }
+        GnssInsFilter::Grekf => {
+            "the 12-state filter switching from GPS/INS to the GREKF (geometry-based range \
+             EKF: the log's beams cast against the world) while GNSS is away"
+        }
+        GnssInsFilter::Mgpmf => {
+            "the 12-state filter switching from GPS/INS to the MGPMF (marginalized \
+             point-mass filter over north, east and yaw) while GNSS is away"
+        }
     }
 }
 
@@ -60,6 +68,30 @@ pub(super) fn notes(r: &GnssInsReplay, about: &str) -> String {
              is {:.3} m; the checks `*_rmse_h_within_1.5x_ekf2` ask each filter for at most \
              {WITHIN_EKF2} times that.\n\n",
             d.rms_h()
+        );
+    }
+    if r.reacquire_after > 0 {
+        let _ = write!(
+            md,
+            "### GNSS re-acquisition\n\nWhen {} fixes in a row fail a filter's gate, the \
+             last of them resets it onto the fixes: its position (and, with the fix \
+             velocity, velocity) covariance is widened by the outer product of the error \
+             the fix shows and the fix applied. `gnss_resets` counts these resets per \
+             method (`gnss_updates.csv`: `reset` 1); many resets mean the filter's model \
+             (its IMU noise) is too optimistic for the log.\n\n",
+            r.reacquire_after
+        );
+    }
+    if let Some(w) = &r.world {
+        let _ = write!(
+            md,
+            "### World\n\nThe map-aided methods cast the log's range beams against the \
+             world {} (moved into the replay's frame). Each switches to the map-aided \
+             update when the fixes the replay uses have fewer satellites than \
+             `map_aided.min_satellites` (a dropped fix counts none) and back when they \
+             have enough again; `map_updates`, `map_left_out` (every beam left out), \
+             `map_failed` and `mode_switches` count what they did.\n\n",
+            fathom_core::echo::echo_message(w)
         );
     }
     if !r.outages.is_empty() {

@@ -1,8 +1,11 @@
 //! The `gnss-ins` replay settings: the schema of `scenarios/gnss-ins.toml` (IMU noise,
-//! GNSS handling with outage windows, initial uncertainty, then a `[[methods]]` list)
-//! and its check into [`GnssInsSettings`].
+//! GNSS handling with outage windows, initial uncertainty, the optional world and the
+//! map-aided filters' tuning, then a `[[methods]]` list) and its check into
+//! [`GnssInsSettings`].
 
 use fathom_estimators::map_aided::{ImuNoise, Ins12Params};
+
+pub use super::map_settings::{MapAidedSettings, MapAidedToml, WorldSettings, WorldToml};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -39,7 +42,16 @@ pub struct GnssInsToml {
     pub gnss: GnssAidToml,
     /// Initial uncertainty of the filters.
     pub initial: GnssInsInitialToml,
-    /// The methods to run on the same log. Default: INS, GPS-INS-12, GPS-INS-15.
+    /// A world mesh for the map-aided filters (`--world FILE` sets `file`). With a
+    /// world and range rows in the log, the methods `GREKF` and `MGPMF` run too
+    /// (added when `[[methods]]` names no map-aided filter). Default: none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub world: Option<WorldToml>,
+    /// Tuning of the map-aided filters (used only with a world).
+    #[serde(default)]
+    pub map_aided: MapAidedToml,
+    /// The methods to run on the same log. Default: INS, GPS-INS-12, GPS-INS-15
+    /// (and GREKF, MGPMF with a world).
     #[serde(default = "default_methods")]
     pub methods: Vec<GnssInsMethodToml>,
 }
@@ -89,10 +101,28 @@ pub struct GnssAidToml {
     ///
     /// Range: 0 to 1 (exclusive).
     pub gate_probability: f64,
+    /// Re-acquisition: the fix that makes this many in a row rejected by the gate
+    /// resets the filter onto the fixes: the position (and, with `use_velocity`, the
+    /// velocity) covariance is widened by the outer product of the error the fix
+    /// shows and the fix applied (it then passes the gate). Counted per method
+    /// (`gnss_resets`). 0: never (a diverged filter rejects every fix for ever).
+    ///
+    /// Range: 0 to 1000.
+    #[serde(default = "default_reacquire")]
+    pub reacquire_after_rejections: usize,
     /// Outage windows: fixes in `[start_s, end_s)` (seconds from the replay's start)
     /// are dropped.
     #[serde(default)]
     pub outages: Vec<OutageToml>,
+}
+
+/// The default of `gnss.reacquire_after_rejections`: 5 fixes (1 s of a 5 Hz
+/// receiver). A consistent filter rejects a consistent fix with the probability
+/// `1 - gnss.gate_probability` (1e-4 in the preset), five in a row practically
+/// never: such a run means the filter diverged (or the receiver jumped for a
+/// second and more, which the filter then follows).
+pub fn default_reacquire() -> usize {
+    5
 }
 
 /// One GNSS outage.
@@ -141,8 +171,9 @@ pub struct GnssInsInitialToml {
 pub struct GnssInsMethodToml {
     /// Name in tables, CSV headers and figures (unique).
     pub name: String,
-    /// `"ins"` (strapdown alone), `"gps-ins-12"` (12-state filter) or `"gps-ins-15"`
-    /// (15-state filter with gyro bias).
+    /// `"ins"` (strapdown alone), `"gps-ins-12"` (12-state filter), `"gps-ins-15"`
+    /// (15-state filter with gyro bias), or with a world `"grekf"` / `"mgpmf"` (the
+    /// 12-state filter switching to the map-aided range update while GNSS is away).
     pub filter: String,
 }
 
@@ -170,13 +201,26 @@ pub enum GnssInsFilter {
     Ekf12,
     /// The 15-state filter `[dp, dv, psi, b_a, b_g]`.
     Ekf15,
+    /// The 12-state filter with the GREKF range update while GNSS is away.
+    Grekf,
+    /// The 12-state filter with the MGPMF range update while GNSS is away.
+    Mgpmf,
+}
+
+impl GnssInsFilter {
+    /// Whether it is a map-aided filter (needs a world and range rows).
+    pub fn is_map_aided(self) -> bool {
+        matches!(self, Self::Grekf | Self::Mgpmf)
+    }
 }
 
 /// The `filter` values.
-pub const FILTERS: [(&str, GnssInsFilter); 3] = [
+pub const FILTERS: [(&str, GnssInsFilter); 5] = [
     ("ins", GnssInsFilter::Ins),
     ("gps-ins-12", GnssInsFilter::Ekf12),
     ("gps-ins-15", GnssInsFilter::Ekf15),
+    ("grekf", GnssInsFilter::Grekf),
+    ("mgpmf", GnssInsFilter::Mgpmf),
 ];
 
 /// A checked method.
@@ -191,6 +235,8 @@ pub struct GnssInsMethod {
 /// Checked settings.
 #[derive(Debug, Clone, PartialEq)]
 pub struct GnssInsSettings {
+    /// The settings file's label (errors found later name it).
+    pub file: String,
     /// `[data] dir`.
     pub data_dir: String,
     /// IMU noise PSDs of the 12-state model.
@@ -205,15 +251,28 @@ pub struct GnssInsSettings {
     pub use_velocity: bool,
     /// Gate probability.
     pub gate_probability: f64,
+    /// Fixes rejected in a row before the re-acquisition (0: never).
+    pub reacquire_after: usize,
     /// Outage windows `[start, end)`, s from the start, sorted.
     pub outages: Vec<[f64; 2]>,
     /// Initial σ: position, velocity, attitude, accel bias, gyro bias.
     pub sigma0: [f64; 5],
+    /// The world, if any.
+    pub world: Option<WorldSettings>,
+    /// The map-aided filters' tuning.
+    pub map_aided: MapAidedSettings,
     /// The methods.
     pub methods: Vec<GnssInsMethod>,
 }
 
 impl GnssInsSettings {
+    /// The world file as written (bounded for display), or `-` without one.
+    pub fn world_file(&self) -> String {
+        self.world
+            .as_ref()
+            .map_or_else(|| "-".into(), |w| fathom_core::echo::echo_file(&w.file))
+    }
+
     /// Whether `t` (s from the start) is inside an outage.
     pub fn in_outage(&self, t: f64) -> bool {
         self.outages.iter().any(|w| t >= w[0] && t < w[1])
@@ -256,6 +315,16 @@ impl GnssInsToml {
                 format!("must be strictly between 0 and 1, got {p}"),
             ));
         }
+        if g.reacquire_after_rejections > 1000 {
+            return Err(SimError::invalid(
+                file,
+                "gnss.reacquire_after_rejections",
+                format!(
+                    "must be 0 (never) to 1000, got {}",
+                    g.reacquire_after_rejections
+                ),
+            ));
+        }
         let mut outages = Vec::with_capacity(g.outages.len());
         for (k, o) in g.outages.iter().enumerate() {
             let start =
@@ -296,18 +365,54 @@ impl GnssInsToml {
                             file,
                             format!("methods[{k}].filter"),
                             format!(
-                                "unknown filter \"{}\"; use one of: ins, gps-ins-12, gps-ins-15",
+                                "unknown filter \"{}\"; use one of: ins, gps-ins-12, gps-ins-15, \
+                                 grekf, mgpmf",
                                 fathom_core::echo::echo(&m.filter)
                             ),
                         )
                     })?;
+                if filter.is_map_aided() && self.world.is_none() {
+                    return Err(SimError::invalid(
+                        file,
+                        format!("methods[{k}].filter"),
+                        format!(
+                            "\"{}\" needs a world: give `--world FILE` (or `[world] file`)",
+                            m.filter
+                        ),
+                    ));
+                }
                 Ok(GnssInsMethod {
                     name: m.name.clone(),
                     filter,
                 })
             })
-            .collect::<Result<Vec<_>, SimError>>()?;
+            .collect::<Result<Vec<GnssInsMethod>, SimError>>()?;
+        let world = self.world.as_ref().map(|w| w.check(file)).transpose()?;
+        let map_aided = self.map_aided.check(file)?;
+        let mut methods = methods;
+        if world.is_some() && !methods.iter().any(|m| m.filter.is_map_aided()) {
+            for (name, filter) in [
+                ("GREKF", GnssInsFilter::Grekf),
+                ("MGPMF", GnssInsFilter::Mgpmf),
+            ] {
+                if methods.iter().any(|m| m.name == name) {
+                    return Err(SimError::invalid(
+                        file,
+                        "methods",
+                        format!(
+                            "a method is named \"{name}\", the name of the map-aided method a \
+                             world adds: rename it, or list the map-aided methods yourself"
+                        ),
+                    ));
+                }
+                methods.push(GnssInsMethod {
+                    name: name.into(),
+                    filter,
+                });
+            }
+        }
         Ok(GnssInsSettings {
+            file: file.to_string(),
             data_dir: self.data.dir.clone(),
             noise,
             gyro_bias_psd: gbrw * gbrw,
@@ -318,8 +423,11 @@ impl GnssInsToml {
             ],
             use_velocity: g.use_velocity,
             gate_probability: p,
+            reacquire_after: g.reacquire_after_rejections,
             outages,
             sigma0,
+            world,
+            map_aided,
             methods,
         })
     }
@@ -367,5 +475,22 @@ mod tests {
         assert!(e(fix).contains("gnss.min_fix_type"));
         let sigma = GNSS_INS_PRESET.replace("sigma_att_rad = 0.05", "sigma_att_rad = 0.0");
         assert!(e(sigma).contains("initial.sigma_att_rad"));
+        // re-acquisition: 5 built in, 0 (never) accepted, beyond 1000 refused, the
+        // default when the key is left out
+        assert_eq!(s.reacquire_after, 5);
+        let key = "reacquire_after_rejections = 5 ";
+        assert!(GNSS_INS_PRESET.contains(key));
+        let never = GNSS_INS_PRESET.replace(key, "reacquire_after_rejections = 0 ");
+        assert_eq!(parse_settings(&never, "p.toml").unwrap().reacquire_after, 0);
+        let huge = GNSS_INS_PRESET.replace(key, "reacquire_after_rejections = 5000 ");
+        assert!(e(huge).contains("gnss.reacquire_after_rejections"));
+        let line = GNSS_INS_PRESET
+            .lines()
+            .find(|l| l.starts_with(key))
+            .unwrap()
+            .to_string();
+        let left_out = GNSS_INS_PRESET.replace(&format!("{line}\n"), "");
+        let d = parse_settings(&left_out, "p.toml").unwrap();
+        assert_eq!(d.reacquire_after, default_reacquire());
     }
 }
