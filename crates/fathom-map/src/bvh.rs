@@ -97,6 +97,23 @@ fn decode(origin: f32, step: f32, q: u8) -> f32 {
     origin + f32::from(q) * step
 }
 
+impl WideNode {
+    /// Sets the planes of every axis from its children's intervals
+    /// (`intervals(axis)`, one per lane, relative to the tree's centre) by
+    /// [`quantize_axis`].
+    fn quantize(&mut self, intervals: impl Fn(usize) -> Vec<(f64, f64)>) {
+        for axis in 0..3 {
+            let (origin, exp, planes) = quantize_axis(&intervals(axis));
+            self.origin[axis] = origin;
+            self.exp[axis] = exp;
+            for (lane, (ql, qh)) in planes.into_iter().enumerate() {
+                self.lo[axis][lane] = ql;
+                self.hi[axis][lane] = qh;
+            }
+        }
+    }
+}
+
 /// The grid of one axis for the child intervals `kids` (`lo <= hi`, relative to the
 /// center): the origin, the step's exponent, and each interval's planes in steps with
 /// `decode(lo) <= lo` and `decode(hi) >= hi`.
@@ -235,16 +252,7 @@ impl BvhCaster {
                 })
                 .collect();
             let mut node = WideNode::EMPTY;
-            for axis in 0..3 {
-                let intervals: Vec<_> = boxes.iter().map(|b| (b.0[axis], b.1[axis])).collect();
-                let (origin, exp, planes) = quantize_axis(&intervals);
-                node.origin[axis] = origin;
-                node.exp[axis] = exp;
-                for (lane, (ql, qh)) in planes.into_iter().enumerate() {
-                    node.lo[axis][lane] = ql;
-                    node.hi[axis][lane] = qh;
-                }
-            }
+            node.quantize(|axis| boxes.iter().map(|b| (b.0[axis], b.1[axis])).collect());
             let mut links = Links {
                 first_node: self.nodes.len() as u32,
                 first_triangle: self.leaf_triangles.len() as u32,
@@ -965,16 +973,7 @@ mod tests {
                 .collect();
             let mut node = WideNode::EMPTY;
             node.used = u8::MAX;
-            for axis in 0..3 {
-                let intervals: Vec<_> = boxes.iter().map(|b| (b.0[axis], b.1[axis])).collect();
-                let (origin, exp, planes) = quantize_axis(&intervals);
-                node.origin[axis] = origin;
-                node.exp[axis] = exp;
-                for (lane, (ql, qh)) in planes.into_iter().enumerate() {
-                    node.lo[axis][lane] = ql;
-                    node.hi[axis][lane] = qh;
-                }
-            }
+            node.quantize(|axis| boxes.iter().map(|b| (b.0[axis], b.1[axis])).collect());
             for lane in 0..WIDTH {
                 // the exact box of the lane (its planes)
                 let p = |side: usize, k: usize| {
