@@ -7,7 +7,7 @@
 //! of up to eight children (widened as `triangle::widen_box` says), each plane
 //! quantized to 8 bits on the node's own grid and rounded outwards; a node's inner
 //! children are consecutive nodes and its triangles consecutive slots in leaf order
-//! (with their mesh index), found from a small side record ([`Links`]). The choice was
+//! (with their mesh index), found from a small side record (`Links`). The choice was
 //! measured on a 120k-triangle city against parry's own closure-based `find_best`
 //! traversal on its 2-wide `f64` nodes and against the `bvh` crate
 //! (docs/performance.md, "Ray casting").

@@ -29,10 +29,10 @@
 //!
 //! Rays go through [`RayCaster::cast_batch`] in chunks of [`CHUNK_POINTS`] candidates
 //! (buffers reused across updates). With more than one thread
-//! ([`LikelihoodWorkers::set_threads`]) the chunks are split into contiguous ranges,
-//! one per scoped thread; each candidate's value is computed by the same code whatever
-//! thread computes it and the totals are integer counts, so the result is
-//! bit-identical for every thread count.
+//! ([`super::Mgpmf::set_threads`], [`super::ParticleFilter::set_threads`]) the
+//! chunks are split into contiguous ranges, one per scoped thread; each candidate's
+//! value is computed by the same code whatever thread computes it and the totals are
+//! integer counts, so the result is bit-identical for every thread count.
 
 use fathom_core::{Ray, RayCaster, RayHit};
 use nalgebra::{Matrix3, Rotation3, Vector3};
