@@ -272,22 +272,38 @@ fn load_settings(
 /// `text` with its `[world] file` set to `world` (made absolute; the table added
 /// when missing).
 fn with_world(text: &str, world: &Path) -> Result<String, Failure> {
+    with_path(text, "world", "file", world, true)
+}
+
+/// `text` with `[table] key` set to `path` made absolute; a missing `[table]` is
+/// added when `add_table`, else a usage error.
+fn with_path(
+    text: &str,
+    table_name: &str,
+    key: &str,
+    path: &Path,
+    add_table: bool,
+) -> Result<String, Failure> {
     let mut table: toml::Table = toml::from_str(text)
         .context("settings")
         .map_err(Failure::Usage)?;
-    let file = std::path::absolute(world)
-        .with_context(|| format!("cannot resolve `{}`", world.display()))
+    let path = std::path::absolute(path)
+        .with_context(|| format!("cannot resolve `{}`", path.display()))
         .map_err(Failure::Usage)?;
-    let entry = table
-        .entry("world")
-        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-    let w = entry
-        .as_table_mut()
-        .ok_or_else(|| Failure::Usage(anyhow!("settings: `world` is not a table")))?;
-    w.insert(
-        "file".into(),
-        toml::Value::String(file.display().to_string()),
-    );
+    if add_table && !table.contains_key(table_name) {
+        table.insert(table_name.into(), toml::Value::Table(toml::Table::new()));
+    }
+    let sub = match table.get_mut(table_name) {
+        None => {
+            return Err(Failure::Usage(anyhow!(
+                "settings: missing table `[{table_name}]`"
+            )));
+        }
+        Some(v) => v
+            .as_table_mut()
+            .ok_or_else(|| Failure::Usage(anyhow!("settings: `{table_name}` is not a table")))?,
+    };
+    sub.insert(key.into(), toml::Value::String(path.display().to_string()));
     toml::to_string(&table)
         .context("settings")
         .map_err(Failure::Run)
@@ -302,20 +318,7 @@ fn data_dir_of(text: &str) -> Option<String> {
 
 /// `text` with its `[data] dir` replaced by `dir` (made absolute).
 fn with_data_dir(text: &str, dir: &Path) -> Result<String, Failure> {
-    let mut table: toml::Table = toml::from_str(text)
-        .context("settings")
-        .map_err(Failure::Usage)?;
-    let dir = std::path::absolute(dir)
-        .with_context(|| format!("cannot resolve `{}`", dir.display()))
-        .map_err(Failure::Usage)?;
-    let data = table
-        .get_mut("data")
-        .and_then(toml::Value::as_table_mut)
-        .ok_or_else(|| Failure::Usage(anyhow!("settings: missing table `[data]`")))?;
-    data.insert("dir".into(), toml::Value::String(dir.display().to_string()));
-    toml::to_string(&table)
-        .context("settings")
-        .map_err(Failure::Run)
+    with_path(text, "data", "dir", dir, false)
 }
 
 fn replay(r: &Request<'_>) -> Result<String, Failure> {
