@@ -112,6 +112,53 @@ fn grid_rays(
     rays
 }
 
+/// The rays of [`grid_rays`] (point-major: `i`, `j`, `k`, beam) reordered by yaw
+/// slice `k`, beam, `i`, `j`.
+fn coherent_order(rays: &[Ray], grid: [usize; 3], beams: usize) -> Vec<Ray> {
+    let [g0, g1, g2] = grid;
+    let mut out = Vec::with_capacity(rays.len());
+    for k in 0..g2 {
+        for beam in 0..beams {
+            for i in 0..g0 {
+                for j in 0..g1 {
+                    out.push(rays[((i * g1 + j) * g2 + k) * beams + beam]);
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Writes the mesh (`buildings.obj`, NED metres) and the rays (`grid_rays.f64`: per ray
+/// origin, direction, max range as seven little-endian `f64`) into `dir`, for the
+/// Embree run of the same rays (`crates/fathom-map/benches/embree_rays.py`).
+fn export_rays(dir: &std::path::Path, mesh: &fathom_map::TriMesh, rays: &[Ray]) {
+    use std::fmt::Write as _;
+    std::fs::create_dir_all(dir).expect("FATHOM_EXPORT_GRID_RAYS: create the folder");
+    let mut obj = String::new();
+    for i in 0..mesh.len() {
+        for v in mesh.corners(i) {
+            let _ = writeln!(obj, "v {} {} {}", v.x, v.y, v.z);
+        }
+        let _ = writeln!(obj, "f {} {} {}", 3 * i + 1, 3 * i + 2, 3 * i + 3);
+    }
+    std::fs::write(dir.join("buildings.obj"), obj).expect("write buildings.obj");
+    let bytes: Vec<u8> = rays
+        .iter()
+        .flat_map(|r| {
+            let (o, d) = (r.origin_in_nav, r.dir_in_nav);
+            [o.x, o.y, o.z, d.x, d.y, d.z, r.max_range]
+        })
+        .flat_map(f64::to_le_bytes)
+        .collect();
+    std::fs::write(dir.join("grid_rays.f64"), bytes).expect("write grid_rays.f64");
+    eprintln!(
+        "map_aided: {} rays and the mesh written to {}",
+        rays.len(),
+        dir.display()
+    );
+}
+
 fn map_aided(c: &mut Criterion) {
     let mut g = c.benchmark_group("map_aided");
     g.warm_up_time(Duration::from_millis(500));
@@ -239,6 +286,23 @@ fn map_aided(c: &mut Criterion) {
     r.sample_size(20).measurement_time(Duration::from_secs(5));
     r.bench_function("grid_41x41x9_7beams", |b| {
         b.iter(|| caster.cast_batch(black_box(&rays), &mut hits).unwrap())
+    });
+    // the same rays in the order of the coherent path (yaw slice, beam, then the
+    // horizontal grid: eight neighbouring points per packet), cast one by one and as
+    // packets
+    let coherent = coherent_order(&rays, grid.grid_points, 7);
+    if let Some(dir) = std::env::var_os("FATHOM_EXPORT_GRID_RAYS") {
+        export_rays(std::path::Path::new(&dir), &city, &coherent);
+    }
+    r.bench_function("grid_41x41x9_7beams_beam_order", |b| {
+        b.iter(|| caster.cast_batch(black_box(&coherent), &mut hits).unwrap())
+    });
+    r.bench_function("grid_41x41x9_7beams_packets", |b| {
+        b.iter(|| {
+            caster
+                .cast_coherent(black_box(&coherent), &mut hits)
+                .unwrap()
+        })
     });
     r.finish();
 }

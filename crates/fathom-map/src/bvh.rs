@@ -26,6 +26,10 @@ use parry3d_f64::partitioning::{Bvh, BvhBuildStrategy, BvhNode, TraversalAction}
 use crate::TriMesh;
 use crate::triangle::{Best, PreparedMesh, PreparedTriangle, widen_box};
 
+mod packet;
+
+pub use packet::PACKET;
+
 /// How the hierarchy is built.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum BvhBuild {
@@ -745,6 +749,31 @@ impl RayCaster for BvhCaster {
         );
         Ok(())
     }
+
+    /// Each group of [`PACKET`] consecutive rays traverses the tree as one packet
+    /// (`bvh/packet.rs`); same hits as [`RayCaster::cast_batch`].
+    fn cast_coherent(
+        &self,
+        rays: &[Ray],
+        hits: &mut [Option<RayHit>],
+    ) -> Result<(), BatchLengthMismatch> {
+        if rays.len() != hits.len() {
+            return Err(BatchLengthMismatch {
+                rays: rays.len(),
+                hits: hits.len(),
+            });
+        }
+        dispatch(
+            #[inline(always)]
+            || {
+                let mut stack = Stack::new();
+                for (r, h) in rays.chunks(PACKET).zip(hits.chunks_mut(PACKET)) {
+                    self.cast_packet(&mut stack, r, h);
+                }
+            },
+        );
+        Ok(())
+    }
 }
 
 #[cfg(test)]
@@ -864,7 +893,13 @@ mod tests {
     }
 
     /// Random triangles of size `size` in a cube of side `spread` around `offset`.
-    fn random_mesh(seed: u64, count: usize, spread: f64, size: f64, offset: f64) -> TriMesh {
+    pub(super) fn random_mesh(
+        seed: u64,
+        count: usize,
+        spread: f64,
+        size: f64,
+        offset: f64,
+    ) -> TriMesh {
         use rand::{Rng, SeedableRng};
         let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
         let mut b = crate::MeshBuilder::new();

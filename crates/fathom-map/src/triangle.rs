@@ -126,6 +126,60 @@ impl PreparedTriangle {
     }
 }
 
+impl PreparedTriangle {
+    /// [`Best::offer`] of this triangle to `N` rays at once, lane by lane: ray `l` has
+    /// origin `o[k][l]`, unit direction `d[k][l]` and best hit so far
+    /// (`best_t[l]`, `best_triangle[l]`). The operations of [`Self::hit`] in the same
+    /// order on every lane, without branches (a loop the compiler vectorizes across
+    /// rays), so each lane's result is that of `offer`, bit for bit. A lane with
+    /// `best_t < 0` never takes a hit (an unused lane).
+    #[inline(always)]
+    pub(crate) fn offer_lanes<const N: usize>(
+        &self,
+        index: u32,
+        o: &[[f64; N]; 3],
+        d: &[[f64; N]; 3],
+        best_t: &mut [f64; N],
+        best_triangle: &mut [u32; N],
+    ) {
+        // the triangle's box of the hit-point check, as in `hit`
+        let mut lo = [0.0; 3];
+        let mut hi = [0.0; 3];
+        for k in 0..3 {
+            let (a, b, c) = (self.v0[k], self.v0[k] + self.e1[k], self.v0[k] + self.e2[k]);
+            let (l, h) = (least(least(a, b), c), greatest(greatest(a, b), c));
+            lo[k] = l - HIT_SLACK * (1.0 + l.abs());
+            hi[k] = h + HIT_SLACK * (1.0 + h.abs());
+        }
+        for l in 0..N {
+            let dl = [d[0][l], d[1][l], d[2][l]];
+            let ol = [o[0][l], o[1][l], o[2][l]];
+            let p = cross(&dl, &self.e2);
+            let det = dot(&self.e1, &p);
+            let inv = 1.0 / det;
+            let s = sub(&ol, &self.v0);
+            let u = dot(&s, &p) * inv;
+            let q = cross(&s, &self.e1);
+            let v = dot(&dl, &q) * inv;
+            let t = dot(&self.e2, &q) * inv;
+            let limit = best_t[l];
+            // `&`, not `&&`: no branch per condition
+            let mut ok = (det != 0.0)
+                & within(u, 0.0, 1.0)
+                & (v >= 0.0)
+                & (u + v <= 1.0)
+                & (t > MIN_RANGE)
+                & (t <= limit);
+            for k in 0..3 {
+                ok &= within(ol[k] + t * dl[k], lo[k], hi[k]);
+            }
+            let better = ok & ((t < limit) | (index < best_triangle[l]));
+            best_t[l] = if better { t } else { limit };
+            best_triangle[l] = if better { index } else { best_triangle[l] };
+        }
+    }
+}
+
 /// The closest hit found so far (module selection rule).
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Best {

@@ -27,8 +27,13 @@
 //! Beams are treated as independent given `n` (the common linear states make them
 //! slightly correlated; the per-beam robust tail needs the factorization).
 //!
-//! Rays go through [`RayCaster::cast_batch`] in chunks of [`CHUNK_POINTS`] candidates
-//! (buffers reused across updates). With more than one thread
+//! Rays go through [`RayCaster::cast_coherent`] in chunks of [`CHUNK_POINTS`]
+//! candidates (buffers reused across updates), beam by beam: one beam from
+//! consecutive candidates of the evaluation order, which the filters choose so that
+//! consecutive candidates are neighbours (the MGPMF: one yaw slice at a time, the
+//! horizontal grid row by row in alternating directions; the particle filter: sorted
+//! along a space-filling curve). The hits, and so the values, are those of single
+//! casts. With more than one thread
 //! ([`super::Mgpmf::set_threads`], [`super::ParticleFilter::set_threads`]) the
 //! chunks are split into contiguous ranges, one per scoped thread; each candidate's
 //! value is computed by the same code whatever thread computes it and the totals are
@@ -85,6 +90,9 @@ pub(crate) struct RayBuffers {
 pub(crate) struct LikelihoodWorkers {
     threads: usize,
     buffers: Vec<RayBuffers>,
+    /// The candidates and their values in the evaluation order (reused).
+    ordered_points: Vec<Vector3<f64>>,
+    ordered_out: Vec<f64>,
 }
 
 impl Default for LikelihoodWorkers {
@@ -92,6 +100,8 @@ impl Default for LikelihoodWorkers {
         Self {
             threads: 1,
             buffers: vec![RayBuffers::default()],
+            ordered_points: Vec::new(),
+            ordered_out: Vec::new(),
         }
     }
 }
@@ -145,8 +155,40 @@ impl LikelihoodModel<'_> {
     }
 
     /// Writes the log-likelihood of every candidate of `points` into `out`
-    /// (`out.len() == points.len()`), on the workers' threads (module docs).
+    /// (`out.len() == points.len()`), on the workers' threads (module docs). The
+    /// candidates are evaluated in the order `order` (a permutation of the indices of
+    /// `points`, or empty for their own order): neighbouring candidates in that order
+    /// make coherent ray groups ([`RayCaster::cast_coherent`]). Each value is the same
+    /// whatever the order.
     pub fn evaluate(
+        &self,
+        points: &[Vector3<f64>],
+        order: &[u32],
+        out: &mut [f64],
+        workers: &mut LikelihoodWorkers,
+        caster: &dyn RayCaster,
+    ) -> LikelihoodStats {
+        if order.is_empty() {
+            return self.evaluate_in_order(points, out, workers, caster);
+        }
+        debug_assert_eq!(order.len(), points.len());
+        let mut ordered = std::mem::take(&mut workers.ordered_points);
+        let mut ordered_out = std::mem::take(&mut workers.ordered_out);
+        ordered.clear();
+        ordered.extend(order.iter().map(|&i| points[i as usize]));
+        ordered_out.clear();
+        ordered_out.resize(ordered.len(), 0.0);
+        let stats = self.evaluate_in_order(&ordered, &mut ordered_out, workers, caster);
+        for (&i, v) in order.iter().zip(&ordered_out) {
+            out[i as usize] = *v;
+        }
+        workers.ordered_points = ordered;
+        workers.ordered_out = ordered_out;
+        stats
+    }
+
+    /// [`Self::evaluate`] in the order of `points`.
+    fn evaluate_in_order(
         &self,
         points: &[Vector3<f64>],
         out: &mut [f64],
@@ -207,29 +249,32 @@ impl LikelihoodModel<'_> {
             .chunks(CHUNK_POINTS)
             .zip(out.chunks_mut(CHUNK_POINTS))
         {
+            // beam-major: ray `j * len + k` is beam `j` from candidate `k`, so that
+            // consecutive rays are one beam from consecutive candidates (the coherent
+            // groups of `cast_coherent`)
+            let len = chunk.len();
             buf.rays.clear();
-            for n in chunk {
+            buf.rays
+                .resize(len * nb, Ray::new(Vector3::zeros(), Vector3::x(), 0.0));
+            for (k, n) in chunk.iter().enumerate() {
                 let (pos, c, _) = self.pose(n);
-                buf.rays.extend(
-                    self.unit_dirs
-                        .iter()
-                        .map(|d| Ray::new(pos, c * d, self.max_range)),
-                );
+                for (j, d) in self.unit_dirs.iter().enumerate() {
+                    buf.rays[j * len + k] = Ray::new(pos, c * d, self.max_range);
+                }
             }
             // every slot is written by the cast: no clearing
             buf.hits.resize(buf.rays.len(), None);
-            let _ = caster.cast_batch(&buf.rays, &mut buf.hits);
+            let _ = caster.cast_coherent(&buf.rays, &mut buf.hits);
             stats.rays += buf.rays.len();
             for (k, (n, o)) in chunk.iter().zip(out_chunk.iter_mut()).enumerate() {
                 let mut ll = 0.0;
                 let mut prod: f64 = 1.0;
-                let base = k * nb;
                 for j in 0..nb {
                     if linear && j % 8 == 7 {
                         ll += prod.ln();
                         prod = 1.0;
                     }
-                    let Some(hit) = &buf.hits[base + j] else {
+                    let Some(hit) = &buf.hits[j * len + k] else {
                         if linear {
                             prod *= outlier;
                         } else {
@@ -238,7 +283,7 @@ impl LikelihoodModel<'_> {
                         continue;
                     };
                     stats.hits += 1;
-                    let u = &buf.rays[base + j].dir_in_nav;
+                    let u = &buf.rays[j * len + k].dir_in_nav;
                     let on = &hit.normal_in_nav;
                     let mut q = on.dot(u);
                     if q.abs() < MIN_COS {
@@ -369,9 +414,20 @@ mod tests {
         ];
         let mut out = [0.0; 3];
         let mut workers = LikelihoodWorkers::default();
-        let st = m.evaluate(&pts, &mut out, &mut workers, &map);
+        let st = m.evaluate(&pts, &[], &mut out, &mut workers, &map);
         assert_eq!(st.rays, 18);
         assert!(out[0] > out[1] + 10.0 && out[0] > out[2], "{out:?}");
+        // any evaluation order gives each candidate the same value, bit for bit
+        for order in [[2u32, 0, 1], [1, 2, 0], [0, 1, 2]] {
+            let mut permuted = [0.0; 3];
+            let st = m.evaluate(&pts, &order, &mut permuted, &mut workers, &map);
+            assert_eq!(st.rays, 18);
+            assert_eq!(
+                permuted.map(f64::to_bits),
+                out.map(f64::to_bits),
+                "{order:?}"
+            );
+        }
         // the linear-domain product equals the sum of the logs of the robust terms
         let (eps, r) = (0.05, 60.0);
         let mut manual = 0.0;

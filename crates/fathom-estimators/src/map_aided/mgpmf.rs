@@ -26,6 +26,7 @@
 use fathom_core::RayCaster;
 use nalgebra::{Matrix3, Vector3};
 
+use super::cast_order::grid_order;
 use super::error::MapAidedError;
 use super::ins12::{Ins12Filter, NominalNav};
 use super::likelihood::{LikelihoodWorkers, model};
@@ -65,6 +66,8 @@ pub struct Mgpmf {
     log_w: Vec<f64>,
     weights: Vec<f64>,
     dirs: Vec<Vector3<f64>>,
+    /// The order the grid points are evaluated in ([`grid_order`]).
+    cast_order: Vec<u32>,
     workers: LikelihoodWorkers,
     linear: LinearStep,
 }
@@ -74,6 +77,7 @@ impl Mgpmf {
     pub fn new(settings: MgpmfSettings) -> Self {
         let n = settings.num_points();
         Self {
+            cast_order: grid_order(settings.grid_points),
             settings,
             points: Vec::with_capacity(n),
             log_w: Vec::with_capacity(n),
@@ -163,7 +167,13 @@ impl Mgpmf {
             &part,
             spacing.component_mul(&spacing) / 6.0,
         );
-        let stats = lik.evaluate(&self.points, &mut self.log_w, &mut self.workers, caster);
+        let stats = lik.evaluate(
+            &self.points,
+            &self.cast_order,
+            &mut self.log_w,
+            &mut self.workers,
+            caster,
+        );
         if !beams.is_empty() && stats.hits == 0 {
             return Err(MapAidedError::PoseOutsideMap {
                 rays: stats.rays,

@@ -48,6 +48,7 @@
 //! no ray hits the map is a typed [`MapAidedError`] with the filter time; every failing
 //! step leaves the filter (and the particles) unchanged.
 
+mod cast_order;
 pub mod error;
 pub mod error_model;
 pub mod findings;

@@ -36,6 +36,7 @@ use nalgebra::{Matrix3, Vector3};
 use rand::Rng;
 use rand_distr::{Distribution, StandardNormal};
 
+use super::cast_order::morton_order;
 use super::error::MapAidedError;
 use super::ins12::{Ins12Filter, NominalNav};
 use super::likelihood::{LikelihoodWorkers, model};
@@ -74,6 +75,9 @@ pub struct ParticleFilter {
     weights: Vec<f64>,
     next: Vec<Vector3<f64>>,
     dirs: Vec<Vector3<f64>>,
+    /// The order the particles are evaluated in ([`morton_order`]) and its sort keys.
+    cast_order: Vec<u32>,
+    order_keys: Vec<(u64, u32)>,
     workers: LikelihoodWorkers,
     linear: LinearStep,
 }
@@ -91,6 +95,8 @@ impl ParticleFilter {
             weights: Vec::with_capacity(n),
             next: Vec::with_capacity(n),
             dirs: Vec::new(),
+            cast_order: Vec::with_capacity(n),
+            order_keys: Vec::with_capacity(n),
             workers: LikelihoodWorkers::default(),
             linear: LinearStep::default(),
         }
@@ -182,7 +188,14 @@ impl ParticleFilter {
             &part,
             Vector3::zeros(),
         );
-        let stats = lik.evaluate(&self.points, &mut self.log_w, &mut self.workers, caster);
+        morton_order(&self.points, &mut self.cast_order, &mut self.order_keys);
+        let stats = lik.evaluate(
+            &self.points,
+            &self.cast_order,
+            &mut self.log_w,
+            &mut self.workers,
+            caster,
+        );
         if !beams.is_empty() && stats.hits == 0 {
             return Err(MapAidedError::PoseOutsideMap {
                 rays: stats.rays,
