@@ -100,8 +100,8 @@ fathom-core = { path = "${ROOT}/crates/fathom-core" }
 nalgebra = "${nalgebra_version}"
 
 # the workspace's settings, so that what the tests above built is reused: its
-# dependencies at opt-level 2, its own crates (here path dependencies, so also
-# matched by "*") at the test profile's opt-level 1
+# dependencies at opt-level 2, fathom-estimators at the test profile's opt-level 3,
+# fathom-core (a path dependency, so also matched by "*") at the profile's 1
 [profile.dev.package."*"]
 opt-level = 2
 
@@ -109,7 +109,7 @@ opt-level = 2
 opt-level = 1
 
 [profile.test.package.fathom-estimators]
-opt-level = 1
+opt-level = 3
 
 [profile.test.package.fathom-core]
 opt-level = 1

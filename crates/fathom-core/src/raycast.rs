@@ -83,6 +83,7 @@ impl Ray {
 
     /// The unit direction, or `None` when the ray is invalid under the module's rules
     /// (non-finite origin or direction, zero direction, `max_range` NaN or `<= 0`).
+    #[inline]
     pub fn unit_dir(&self) -> Option<Vector3<f64>> {
         let finite = self.origin_in_nav.iter().all(|c| c.is_finite())
             && self.dir_in_nav.iter().all(|c| c.is_finite());

@@ -2,9 +2,9 @@
 //! filter steps of the six methods at the IMU rate and the ray casts of the grid and
 //! particle filters (grid points x beams at their update rate), which dominate; what
 //! a run holds (its traces at the evaluation rate) and what the analysis keeps. The
-//! constants are set from the preset's measured cost (50 runs + 3 x 20 ablation runs:
-//! ~70 s of CPU in a release build, `docs/performance.md`); the estimate is good to a
-//! factor of a few.
+//! constants are set from the preset's measured cost (50 runs + 3 x 20 ablation runs
+//! on the 41 x 41 x 9 grid at 5 Hz: ~560 s of CPU in a release build,
+//! `docs/performance.md`); the estimate is good to a factor of a few.
 
 use super::scenario::{PresetWorld, Ranging, SceneToml, UrbanScenario};
 use fathom_sim::cost::{CostTerm, Held};
@@ -13,8 +13,10 @@ use fathom_sim::cost::{CostTerm, Held};
 const METHODS: f64 = 6.0;
 /// Single-core time per IMU sample of one flight, all methods, s.
 const IMU_SAMPLE_S: f64 = 1e-6;
-/// Single-core time per ray cast of the grid and particle filters, s.
-const RAY_S: f64 = 4.5e-8;
+/// Single-core time per ray the grid and particle filters would cast over the whole
+/// flight, s: ~70 ns per ray cast and evaluated inside an update, times the share of
+/// the flight they run (the GNSS shadow, about a fifth).
+const RAY_S: f64 = 1.3e-8;
 /// Bytes a flight holds per evaluation instant (truth and every method's estimate,
 /// covariance diagonal, mode).
 const EVAL_BYTES: f64 = 6.0 * 240.0;
@@ -24,8 +26,8 @@ const RANGEFINDERS: f64 = 7.0;
 const PRESET_RUNS: f64 = 50.0;
 const PRESET_ABLATION_RUNS: f64 = 20.0;
 const PRESET_IMU_HZ: f64 = 100.0;
-const PRESET_GRID_POINTS: f64 = 15.0 * 15.0 * 5.0;
-const PRESET_GRID_HZ: f64 = 2.5;
+const PRESET_GRID_POINTS: f64 = 41.0 * 41.0 * 9.0;
+const PRESET_GRID_HZ: f64 = 5.0;
 const PRESET_EVAL_HZ: f64 = 5.0;
 const PRESET_FLIGHT_S: f64 = 155.0;
 
