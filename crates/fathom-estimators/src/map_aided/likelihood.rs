@@ -24,6 +24,10 @@
 //! (`Lambda = 0`: the standard bootstrap likelihood). A beam without a predicted hit has
 //! `L = max(eps, 1e-9) / max_range` (only an outlier explains it). The barometer,
 //! which sees only `dp_D`, adds a Gaussian factor with `s^2 = sigma_b^2 + P_DD|n`.
+//! Far beams: where `x = nu^2 / (2 s^2)` is so large that the Gaussian term is below
+//! half an ulp of the tail, `term + eps / max_range` rounds to the tail itself, so
+//! the exp and the sqrt are skipped and the tail taken; the value is the same bit for
+//! bit (the bound is in `evaluate_on`, tested).
 //! Beams are treated as independent given `n` (the common linear states make them
 //! slightly correlated; the per-beam robust tail needs the factorization).
 //!
@@ -51,6 +55,10 @@ pub const CHUNK_POINTS: usize = 256;
 
 /// The most threads one likelihood evaluation may use.
 pub const MAX_THREADS: usize = 256;
+
+/// Beams whose far threshold is precomputed per evaluation (more beams compute it
+/// never and take every exp).
+const FAR_BEAMS: usize = 16;
 
 /// Smallest `|o . u|` used in a likelihood row (a grazing hit's row is large, not
 /// infinite).
@@ -244,6 +252,20 @@ impl LikelihoodModel<'_> {
         let outlier = eps.max(1e-9) / self.max_range;
         let ln_outlier = outlier.ln();
         let half_ln_2pi = 0.5 * (2.0 * std::f64::consts::PI).ln();
+        // A beam whose Gaussian term cannot change `term + tail` (module docs, "far
+        // beams"): with `s >= sigma / 2`, the term is at most
+        // `keep_norm exp(-x) / (sigma / 2)`, below `tail 2^-56` (under half an ulp of
+        // `tail`, with room for the rounding of the term) once `x` exceeds this.
+        let far = |sigma: f64| {
+            let bound = (keep_norm / (0.5 * sigma * tail)).ln() + 56.0 * std::f64::consts::LN_2;
+            if linear && tail >= f64::MIN_POSITIVE && bound.is_finite() {
+                bound
+            } else {
+                f64::INFINITY
+            }
+        };
+        let far_beams: [f64; FAR_BEAMS] =
+            std::array::from_fn(|j| self.beams.get(j).map_or(f64::INFINITY, |b| far(b.sigma_m)));
         let mut stats = LikelihoodStats::default();
         for (chunk, out_chunk) in points
             .chunks(CHUNK_POINTS)
@@ -300,7 +322,14 @@ impl LikelihoodModel<'_> {
                         + h_n.component_mul(&h_n).dot(&self.kernel_var);
                     let nu = beam.range_m - hit.range;
                     if linear {
-                        prod *= keep_norm * (-0.5 * nu * nu / s2).exp() / s2.sqrt() + tail;
+                        let a = -0.5 * nu * nu / s2;
+                        let far_x = far_beams.get(j).copied().unwrap_or(f64::INFINITY);
+                        // `term + tail == tail` bit for bit for a far beam: skip exp
+                        prod *= if -a > far_x && s2 >= 0.25 * beam.sigma_m * beam.sigma_m {
+                            tail
+                        } else {
+                            keep_norm * a.exp() / s2.sqrt() + tail
+                        };
                     } else {
                         ll += -0.5 * nu * nu / s2 - 0.5 * s2.ln() - half_ln_2pi;
                     }
@@ -357,6 +386,36 @@ mod tests {
     use crate::map_aided::marginal::Partition;
     use crate::map_aided::test_support::Planes;
     use nalgebra::UnitQuaternion;
+
+    /// The far-beam bound of `evaluate_on`: beyond it `term + tail` is the tail, bit
+    /// for bit, for every `s^2 >= sigma^2 / 4`; 10 below it the term shows (the
+    /// negative control).
+    #[test]
+    fn beyond_the_far_bound_the_gaussian_term_vanishes_in_the_tail() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(16);
+        let mut shown = 0;
+        for _ in 0..20_000 {
+            let eps = [0.01, 0.05, 0.3][rng.random_range(0..3)];
+            let max_range = [5.0, 40.0, 60.0, 1000.0][rng.random_range(0..4)];
+            let sigma: f64 = 10f64.powf(rng.random_range(-3.0..0.5));
+            let keep_norm = (1.0 - eps) / (2.0 * std::f64::consts::PI).sqrt();
+            let tail = eps / max_range;
+            let bound = (keep_norm / (0.5 * sigma * tail)).ln() + 56.0 * std::f64::consts::LN_2;
+            let s2 = sigma * sigma * rng.random_range(0.25..100.0);
+            let x = bound * (1.0 + 1e-12) + rng.random_range(0.0..5.0);
+            let term = |x: f64| keep_norm * (-x).exp() / s2.sqrt() + tail;
+            assert_eq!(
+                term(x).to_bits(),
+                tail.to_bits(),
+                "{eps} {max_range} {sigma} {s2} {x}"
+            );
+            // the smallest s^2 the bound allows shows the term 10 below the bound
+            let tight = keep_norm * (-(bound - 10.0)).exp() / (0.5 * sigma) + tail;
+            shown += usize::from(tight != tail);
+        }
+        assert_eq!(shown, 20_000);
+    }
 
     /// The candidate pose is the nominal corrected by the joint error `(n, E[l | n])`,
     /// and the likelihood peaks at the true offset.
