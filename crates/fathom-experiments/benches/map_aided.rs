@@ -291,6 +291,12 @@ fn map_aided(c: &mut Criterion) {
     // horizontal grid: eight neighbouring points per packet), cast one by one and as
     // packets
     let coherent = coherent_order(&rays, grid.grid_points, 7);
+    caster.cast_coherent(&coherent, &mut hits).unwrap();
+    eprintln!(
+        "map_aided_rays/grid_41x41x9_7beams: {} triangles, hit fraction {:.4}",
+        city.len(),
+        hits.iter().filter(|h| h.is_some()).count() as f64 / hits.len() as f64
+    );
     if let Some(dir) = std::env::var_os("FATHOM_EXPORT_GRID_RAYS") {
         export_rays(std::path::Path::new(&dir), &city, &coherent);
     }
