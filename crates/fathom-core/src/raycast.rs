@@ -138,6 +138,23 @@ pub struct BatchLengthMismatch {
     pub hits: usize,
 }
 
+impl BatchLengthMismatch {
+    /// `Ok` when the output buffer has one slot per ray.
+    ///
+    /// # Errors
+    /// The mismatch, when `hits.len() != rays.len()`.
+    pub fn check(rays: &[Ray], hits: &[Option<RayHit>]) -> Result<(), Self> {
+        if rays.len() == hits.len() {
+            Ok(())
+        } else {
+            Err(Self {
+                rays: rays.len(),
+                hits: hits.len(),
+            })
+        }
+    }
+}
+
 /// Closest-hit ray casting against a static map (see the module rules).
 ///
 /// Implementations are read-only (`&self`) and use the calling thread only: the
@@ -168,12 +185,7 @@ pub trait RayCaster: Sync {
         rays: &[Ray],
         hits: &mut [Option<RayHit>],
     ) -> Result<(), BatchLengthMismatch> {
-        if rays.len() != hits.len() {
-            return Err(BatchLengthMismatch {
-                rays: rays.len(),
-                hits: hits.len(),
-            });
-        }
+        BatchLengthMismatch::check(rays, hits)?;
         for (ray, hit) in rays.iter().zip(hits.iter_mut()) {
             *hit = self.cast_ray(ray);
         }

@@ -637,6 +637,51 @@ impl BvhCaster {
 }
 
 impl BvhCaster {
+    /// The inner children of `node` in `hit` (entries `ent`), far to near: the nearest
+    /// is returned to be visited next, the others within `limit` pushed so that the
+    /// nearer are popped first.
+    #[inline(always)]
+    fn visit_children(
+        &self,
+        node: &WideNode,
+        links: &Links,
+        ent: &[f32; WIDTH],
+        hit: u32,
+        limit: f32,
+        stack: &mut Stack,
+    ) -> Option<(u32, f32)> {
+        let inner_lanes = u32::from(node.used) & !u32::from(links.leaf);
+        let mut inner: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
+        let mut count = 0;
+        let mut lanes = hit & inner_lanes;
+        while lanes != 0 {
+            let lane = lanes.trailing_zeros();
+            lanes &= lanes - 1;
+            let child = links.first_node + (inner_lanes & ((1 << lane) - 1)).count_ones();
+            let e = ent[lane as usize];
+            // insertion into the far-to-near order
+            let mut j = count;
+            while j > 0 && inner[j - 1].0 < e {
+                inner[j] = inner[j - 1];
+                j -= 1;
+            }
+            inner[j] = (e, child);
+            count += 1;
+        }
+        let (&(e, c), farther) = inner[..count].split_last()?;
+        for &(e, c) in farther {
+            if e <= limit {
+                stack.push(c, e);
+                // touch the node now: its load overlaps with the work before it is
+                // popped (a software prefetch without `unsafe`)
+                std::hint::black_box(self.nodes[c as usize].used);
+            }
+        }
+        Some((c, e))
+    }
+}
+
+impl BvhCaster {
     /// [`RayCaster::cast`] with a caller's traversal stack (left empty).
     #[inline(always)]
     fn cast_with(
@@ -677,37 +722,7 @@ impl BvhCaster {
                 }
                 limit = round_up(best.t);
             }
-            // inner children, kept sorted far to near: the nearest is visited next,
-            // the others pushed so that the nearer are popped first
-            let inner_lanes = u32::from(node.used) & !leaf;
-            let mut inner: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
-            let mut count = 0;
-            let mut lanes = hit & inner_lanes;
-            while lanes != 0 {
-                let lane = lanes.trailing_zeros();
-                lanes &= lanes - 1;
-                let child = links.first_node + (inner_lanes & ((1 << lane) - 1)).count_ones();
-                let e = ent[lane as usize];
-                // insertion into the far-to-near order
-                let mut j = count;
-                while j > 0 && inner[j - 1].0 < e {
-                    inner[j] = inner[j - 1];
-                    j -= 1;
-                }
-                inner[j] = (e, child);
-                count += 1;
-            }
-            if let Some((&(e, c), farther)) = inner[..count].split_last() {
-                for &(e, c) in farther {
-                    if e <= limit {
-                        stack.push(c, e);
-                        // touch the node now: its load overlaps with the work before
-                        // it is popped (a software prefetch without `unsafe`)
-                        std::hint::black_box(self.nodes[c as usize].used);
-                    }
-                }
-                next = Some((c, e));
-            }
+            next = self.visit_children(node, links, &ent, hit, limit, stack);
         }
         self.mesh.hit_record(&best, &d)
     }
@@ -732,12 +747,7 @@ impl RayCaster for BvhCaster {
         rays: &[Ray],
         hits: &mut [Option<RayHit>],
     ) -> Result<(), BatchLengthMismatch> {
-        if rays.len() != hits.len() {
-            return Err(BatchLengthMismatch {
-                rays: rays.len(),
-                hits: hits.len(),
-            });
-        }
+        BatchLengthMismatch::check(rays, hits)?;
         dispatch(
             #[inline(always)]
             || {
@@ -757,12 +767,7 @@ impl RayCaster for BvhCaster {
         rays: &[Ray],
         hits: &mut [Option<RayHit>],
     ) -> Result<(), BatchLengthMismatch> {
-        if rays.len() != hits.len() {
-            return Err(BatchLengthMismatch {
-                rays: rays.len(),
-                hits: hits.len(),
-            });
-        }
+        BatchLengthMismatch::check(rays, hits)?;
         dispatch(
             #[inline(always)]
             || {

@@ -98,50 +98,29 @@ impl BvhCaster {
         let mut near = [0.0f32; WIDTH];
         let mut hit = [0u8; WIDTH];
         for lane in 0..WIDTH {
-            let (ax0, ax1) = corners(
-                decode(g0, t0, node.lo[0][lane]),
-                b.lo_min[0],
-                b.lo_max[0],
-                b.inv_min[0],
-                b.inv_max[0],
-            );
-            let (bx0, bx1) = corners(
-                decode(g0, t0, node.hi[0][lane]),
-                b.hi_min[0],
-                b.hi_max[0],
-                b.inv_min[0],
-                b.inv_max[0],
-            );
-            let (ay0, ay1) = corners(
-                decode(g1, t1, node.lo[1][lane]),
-                b.lo_min[1],
-                b.lo_max[1],
-                b.inv_min[1],
-                b.inv_max[1],
-            );
-            let (by0, by1) = corners(
-                decode(g1, t1, node.hi[1][lane]),
-                b.hi_min[1],
-                b.hi_max[1],
-                b.inv_min[1],
-                b.inv_max[1],
-            );
-            let (az0, az1) = corners(
-                decode(g2, t2, node.lo[2][lane]),
-                b.lo_min[2],
-                b.lo_max[2],
-                b.inv_min[2],
-                b.inv_max[2],
-            );
-            let (bz0, bz1) = corners(
-                decode(g2, t2, node.hi[2][lane]),
-                b.hi_min[2],
-                b.hi_max[2],
-                b.inv_min[2],
-                b.inv_max[2],
-            );
-            let n = max(max(min(ax0, bx0), min(ay0, by0)), min(az0, bz0));
-            let f = min(min(max(ax1, bx1), max(ay1, by1)), max(az1, bz1));
+            // the entry's low and the exit's high bound of the slab of axis `k`
+            let slab = |k: usize, g: f32, t: f32| {
+                let (a_low, a_high) = corners(
+                    decode(g, t, node.lo[k][lane]),
+                    b.lo_min[k],
+                    b.lo_max[k],
+                    b.inv_min[k],
+                    b.inv_max[k],
+                );
+                let (b_low, b_high) = corners(
+                    decode(g, t, node.hi[k][lane]),
+                    b.hi_min[k],
+                    b.hi_max[k],
+                    b.inv_min[k],
+                    b.inv_max[k],
+                );
+                (min(a_low, b_low), max(a_high, b_high))
+            };
+            let (nx, fx) = slab(0, g0, t0);
+            let (ny, fy) = slab(1, g1, t1);
+            let (nz, fz) = slab(2, g2, t2);
+            let n = max(max(nx, ny), nz);
+            let f = min(min(fx, fy), fz);
             let n = max(n, 0.0) * (1.0 - F32_SLACK);
             near[lane] = n;
             hit[lane] = u8::from(n <= min(f * (1.0 + F32_SLACK), limit));
@@ -213,31 +192,7 @@ impl BvhCaster {
                 }
                 limit = packet_limit(&best_t);
             }
-            let inner_lanes = u32::from(node.used) & !leaf;
-            let mut inner: [(f32, u32); WIDTH] = [(0.0, 0); WIDTH];
-            let mut kids = 0;
-            let mut lanes = hit & inner_lanes;
-            while lanes != 0 {
-                let lane = lanes.trailing_zeros();
-                lanes &= lanes - 1;
-                let child = links.first_node + (inner_lanes & ((1 << lane) - 1)).count_ones();
-                let e = ent[lane as usize];
-                let mut j = kids;
-                while j > 0 && inner[j - 1].0 < e {
-                    inner[j] = inner[j - 1];
-                    j -= 1;
-                }
-                inner[j] = (e, child);
-                kids += 1;
-            }
-            if let Some((&(e, c), farther)) = inner[..kids].split_last() {
-                for &(e, c) in farther {
-                    if e <= limit {
-                        stack.push(c, e);
-                    }
-                }
-                next = Some((c, e));
-            }
+            next = self.visit_children(node, links, &ent, hit, limit, stack);
         }
         for s in 0..count {
             let best = Best {
