@@ -370,6 +370,10 @@ fn read_checked<E: Experiment>(
     if let Some(table) = &as_written {
         check_magnitudes(table, file)?;
     }
+    // and as read: a whole number written for a real-valued key
+    // (`9223372036854775807`) is a float now, with the float's limits (found by
+    // fuzzing: the resolved scenario did not check again)
+    check_magnitudes(&table_of(&scenario, file)?, file)?;
     check_overrides(runs, seed, None)?;
     if let Some(n) = runs {
         // A deterministic experiment has no run count to replace (`cargo xtask paper
