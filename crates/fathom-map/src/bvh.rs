@@ -681,6 +681,77 @@ impl BvhCaster {
     }
 }
 
+/// What a traversal tests: one ray ([`OneRay`]) or a packet (`packet.rs`).
+trait Visitor {
+    /// Entries and hit mask of `node`'s children within `limit` ([`BvhCaster::entries`]).
+    fn test(&self, node: &WideNode, limit: f32) -> ([f32; WIDTH], u32);
+    /// Tests triangle `index`, keeping it where it is the better hit.
+    fn offer(&mut self, tri: &PreparedTriangle, index: u32);
+    /// The node pruning bound: the best range as an `f32` not below it (for a packet,
+    /// its largest).
+    fn limit(&self) -> f32;
+}
+
+/// One ray's traversal state.
+struct OneRay {
+    ray: RayF32,
+    o: [f64; 3],
+    d: [f64; 3],
+    best: Best,
+}
+
+impl Visitor for OneRay {
+    #[inline(always)]
+    fn test(&self, node: &WideNode, limit: f32) -> ([f32; WIDTH], u32) {
+        BvhCaster::entries(node, &self.ray, limit)
+    }
+
+    #[inline(always)]
+    fn offer(&mut self, tri: &PreparedTriangle, index: u32) {
+        self.best.offer(tri, index, &self.o, &self.d);
+    }
+
+    #[inline(always)]
+    fn limit(&self) -> f32 {
+        round_up(self.best.t)
+    }
+}
+
+impl BvhCaster {
+    /// Depth-first traversal for `visitor`: a node is skipped when its entry exceeds
+    /// the limit; a node's triangles are offered, then the limit renewed; the nearest
+    /// inner child is visited next ([`Self::visit_children`]).
+    #[inline(always)]
+    fn walk(&self, stack: &mut Stack, visitor: &mut impl Visitor) {
+        let mut limit = visitor.limit();
+        stack.clear();
+        // the node to visit next without going through the stack (the nearest child
+        // of the last node), else the top of the stack
+        let mut next = Some((0u32, f32::NEG_INFINITY));
+        while let Some((n, entry)) = next.take().or_else(|| stack.pop()) {
+            if entry > limit {
+                continue;
+            }
+            let node = &self.nodes[n as usize];
+            let links = &self.links[n as usize];
+            let (ent, hit) = visitor.test(node, limit);
+            let leaf = u32::from(links.leaf);
+            let mut leaves = hit & leaf;
+            if leaves != 0 {
+                while leaves != 0 {
+                    let lane = leaves.trailing_zeros();
+                    leaves &= leaves - 1;
+                    let slot = links.first_triangle + (leaf & ((1 << lane) - 1)).count_ones();
+                    let (tri, index) = &self.leaf_triangles[slot as usize];
+                    visitor.offer(tri, *index);
+                }
+                limit = visitor.limit();
+            }
+            next = self.visit_children(node, links, &ent, hit, limit, stack);
+        }
+    }
+}
+
 impl BvhCaster {
     /// [`RayCaster::cast`] with a caller's traversal stack (left empty).
     #[inline(always)]
@@ -695,35 +766,14 @@ impl BvhCaster {
         if self.nodes.is_empty() {
             return None;
         }
-        let ray = RayF32::new(&o, &d, &self.center);
-        let mut best = Best::new(max_range);
-        // `best.t` as an f32 not below it (the node pruning bound)
-        let mut limit = round_up(best.t);
-        stack.clear();
-        // the node to visit next without going through the stack (the nearest child
-        // of the last node), else the top of the stack
-        let mut next = Some((0u32, f32::NEG_INFINITY));
-        while let Some((n, entry)) = next.take().or_else(|| stack.pop()) {
-            if entry > limit {
-                continue;
-            }
-            let node = &self.nodes[n as usize];
-            let links = &self.links[n as usize];
-            let (ent, hit) = Self::entries(node, &ray, limit);
-            let leaf = u32::from(links.leaf);
-            let mut leaves = hit & leaf;
-            if leaves != 0 {
-                while leaves != 0 {
-                    let lane = leaves.trailing_zeros();
-                    leaves &= leaves - 1;
-                    let slot = links.first_triangle + (leaf & ((1 << lane) - 1)).count_ones();
-                    let (tri, index) = &self.leaf_triangles[slot as usize];
-                    best.offer(tri, *index, &o, &d);
-                }
-                limit = round_up(best.t);
-            }
-            next = self.visit_children(node, links, &ent, hit, limit, stack);
-        }
+        let mut one = OneRay {
+            ray: RayF32::new(&o, &d, &self.center),
+            o,
+            d,
+            best: Best::new(max_range),
+        };
+        self.walk(stack, &mut one);
+        let best = one.best;
         self.mesh.hit_record(&best, &d)
     }
 }

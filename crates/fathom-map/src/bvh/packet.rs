@@ -28,9 +28,10 @@
 use fathom_core::{Ray, RayHit};
 
 use super::{
-    BvhCaster, F32_SLACK, RayF32, Stack, WIDTH, WideNode, decode, gather, max, min, round_up, step,
+    BvhCaster, F32_SLACK, RayF32, Stack, Visitor, WIDTH, WideNode, decode, gather, max, min,
+    round_up, step,
 };
-use crate::triangle::{Best, PreparedMesh};
+use crate::triangle::{Best, PreparedMesh, PreparedTriangle};
 
 /// Rays per packet.
 pub const PACKET: usize = fathom_core::raycast::COHERENT_GROUP;
@@ -87,6 +88,46 @@ fn corners(plane: f32, x_min: f32, x_max: f32, i_min: f32, i_max: f32) -> (f32, 
     (min(min(p0, p1), min(p2, p3)), max(max(p0, p1), max(p2, p3)))
 }
 
+/// A packet's traversal state: its bounds and, by axis and slot, its rays and best
+/// hits (unused slots have a negative best range, so they take no hit).
+struct Packet {
+    bounds: Bounds,
+    o: [[f64; PACKET]; 3],
+    d: [[f64; PACKET]; 3],
+    best_t: [f64; PACKET],
+    best_triangle: [u32; PACKET],
+}
+
+impl Visitor for Packet {
+    #[inline(always)]
+    fn test(&self, node: &WideNode, limit: f32) -> ([f32; WIDTH], u32) {
+        BvhCaster::packet_entries(node, &self.bounds, limit)
+    }
+
+    /// Each triangle tested for every ray of the packet at once.
+    #[inline(always)]
+    fn offer(&mut self, tri: &PreparedTriangle, index: u32) {
+        tri.offer_lanes(
+            index,
+            &self.o,
+            &self.d,
+            &mut self.best_t,
+            &mut self.best_triangle,
+        );
+    }
+
+    /// The largest ray's best range, as an f32 not below it.
+    #[inline(always)]
+    fn limit(&self) -> f32 {
+        round_up(
+            self.best_t
+                .iter()
+                .copied()
+                .fold(f64::NEG_INFINITY, f64::max),
+        )
+    }
+}
+
 impl BvhCaster {
     /// Lower bounds of the entry ranges of `node`'s child boxes over the packet, and
     /// the mask of the boxes some ray of the packet may enter within `limit` (the
@@ -137,7 +178,7 @@ impl BvhCaster {
         let mut o = [[0.0f64; PACKET]; 3];
         let mut d = [[1.0f64; PACKET]; 3];
         let mut best_t = [-1.0f64; PACKET];
-        let mut best_triangle = [u32::MAX; PACKET];
+        let best_triangle = [u32::MAX; PACKET];
         let mut prepared = [RayF32 {
             lo: [0.0; 3],
             hi: [0.0; 3],
@@ -164,36 +205,20 @@ impl BvhCaster {
         if count == 0 || self.nodes.is_empty() {
             return;
         }
-        let bounds = Bounds::new(&prepared[..count]);
-        // the packet's pruning bound: the largest ray's `best_t`, as an f32 not below it
-        let packet_limit = |best_t: &[f64; PACKET]| {
-            round_up(best_t.iter().copied().fold(f64::NEG_INFINITY, f64::max))
+        let mut packet = Packet {
+            bounds: Bounds::new(&prepared[..count]),
+            o,
+            d,
+            best_t,
+            best_triangle,
         };
-        let mut limit = packet_limit(&best_t);
-        stack.clear();
-        let mut next = Some((0u32, f32::NEG_INFINITY));
-        while let Some((n, entry)) = next.take().or_else(|| stack.pop()) {
-            if entry > limit {
-                continue;
-            }
-            let node = &self.nodes[n as usize];
-            let links = &self.links[n as usize];
-            let (ent, hit) = Self::packet_entries(node, &bounds, limit);
-            let leaf = u32::from(links.leaf);
-            let mut leaves = hit & leaf;
-            if leaves != 0 {
-                // each triangle tested for every ray of the packet at once
-                while leaves != 0 {
-                    let lane = leaves.trailing_zeros();
-                    leaves &= leaves - 1;
-                    let slot = links.first_triangle + (leaf & ((1 << lane) - 1)).count_ones();
-                    let (tri, index) = &self.leaf_triangles[slot as usize];
-                    tri.offer_lanes(*index, &o, &d, &mut best_t, &mut best_triangle);
-                }
-                limit = packet_limit(&best_t);
-            }
-            next = self.visit_children(node, links, &ent, hit, limit, stack);
-        }
+        self.walk(stack, &mut packet);
+        let Packet {
+            d,
+            best_t,
+            best_triangle,
+            ..
+        } = packet;
         for s in 0..count {
             let best = Best {
                 t: best_t[s],
